@@ -1,0 +1,98 @@
+// The stereo rig model: intrinsics as a function of zoom, Brown distortion, home extrinsics
+// and the pan-tilt kinematics of each camera. Shared by the simulator, perception and control.
+//
+// Frames (DESIGN.md): camera frame x right, y down, z forward (OpenCV). Head frame: origin at
+// the midpoint of the baseline, axes of the left camera at pan = tilt = 0.
+// Pan turns the optical axis towards +x (a rotation about the camera's home y axis, fixed to
+// the base); tilt turns it towards -y, up (about the x axis carried by the pan stage):
+//   R_head_camera(pan, tilt) = R_head_camera(home) * Ry(pan) * Rx(tilt).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace ptz {
+
+enum class Side { kLeft = 0, kRight = 1 };
+const char* sideName(Side side);
+
+// Pinhole intrinsics (pixels) and Brown distortion k1, k2, p1, p2, k3 (OpenCV's order).
+struct Intrinsics {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  std::array<double, 5> distortion{};
+};
+
+struct ZoomEntry {
+  double zoom = 1;  // zoom ratio (1 = widest)
+  Intrinsics intrinsics;
+};
+
+struct PtzPose {
+  double pan_rad = 0;
+  double tilt_rad = 0;
+  double zoom = 1;
+};
+
+// Applies Brown distortion to normalised image coordinates (x/z, y/z).
+Eigen::Vector2d distortNormalised(const Eigen::Vector2d& xy, const std::array<double, 5>& d);
+
+// One camera at one pan/tilt/zoom: its current projection.
+struct CameraView {
+  int width = 0, height = 0;
+  Intrinsics intrinsics;
+  Eigen::Matrix3d rotation_head_camera = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d position_head_m = Eigen::Vector3d::Zero();
+
+  Eigen::Vector3d toCamera(const Eigen::Vector3d& p_head) const;
+  // Pixel of a head-frame point, with distortion. Points behind the camera give NaN.
+  Eigen::Vector2d project(const Eigen::Vector3d& p_head) const;
+  // Pixel of a camera-frame point, with distortion.
+  Eigen::Vector2d projectCamera(const Eigen::Vector3d& p_camera) const;
+};
+
+struct CameraSpec {
+  int width = 640, height = 480;
+  // Sorted by zoom, at least one entry; intrinsics are interpolated linearly in zoom.
+  std::vector<ZoomEntry> zoom_table;
+  // Optical centre relative to the pan/tilt pivot, in the camera frame, m.
+  Eigen::Vector3d optical_centre_from_pivot_m = Eigen::Vector3d::Zero();
+
+  Intrinsics intrinsicsAt(double zoom) const;
+  double minZoom() const { return zoom_table.front().zoom; }
+  double maxZoom() const { return zoom_table.back().zoom; }
+};
+
+// Relative pose of the right camera: x_right = R x_left + T (OpenCV's stereoCalibrate).
+struct StereoExtrinsics {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d T = Eigen::Vector3d::Zero();
+};
+
+class StereoRig {
+ public:
+  CameraSpec left, right;
+  StereoExtrinsics home;  // extrinsics at pan = tilt = 0 of both cameras
+
+  const CameraSpec& camera(Side side) const { return side == Side::kLeft ? left : right; }
+  // Pose of a camera in the head frame at the given pan and tilt.
+  void cameraPose(Side side, double pan_rad, double tilt_rad, Eigen::Matrix3d* rotation_head_camera,
+                  Eigen::Vector3d* position_head_m) const;
+  CameraView view(Side side, const PtzPose& pose) const;
+  StereoExtrinsics extrinsics(const PtzPose& left_pose, const PtzPose& right_pose) const;
+  double baselineM() const { return home.T.norm(); }
+
+  // OpenCV FileStorage YAML; load() throws ConfigError naming the file and the field.
+  static StereoRig load(const std::string& path);
+  void save(const std::string& path) const;
+  // A plausible PTZ rig: VGA, 1x-10x zoom, 0.3 m baseline, mild distortion.
+  static StereoRig makeDefault();
+};
+
+Eigen::Matrix3d rotationY(double angle_rad);
+Eigen::Matrix3d rotationX(double angle_rad);
+
+}  // namespace ptz

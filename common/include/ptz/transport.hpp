@@ -1,0 +1,115 @@
+// The LCM edge shared by every process: URL and channel names, image encoding inside
+// STEREO_FRAME, the 1 Hz PROCESS_STATUS heartbeat, clocks and clean shutdown.
+#pragma once
+
+#include <lcm/lcm-cpp.hpp>
+#include <opencv2/core.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "ptz/config.hpp"
+#include "ptzstereo/image_t.hpp"
+#include "ptzstereo/process_status_t.hpp"
+
+namespace ptz {
+
+// Host-only multicast with a receive buffer that holds raw VGA stereo frames.
+constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+// Declares lcm_url, channel_prefix and status_period_s.
+void addTransportParams(Params& params);
+// --lcm-url, else $LCM_DEFAULT_URL, else kDefaultLcmUrl.
+std::string lcmUrl(const Params& params);
+// Warns on stderr (with the exact fix) when a udpm URL asks for no receive buffer or for one
+// larger than net.core.rmem_max allows: raw VGA stereo frames are then lost. Returns false then.
+bool warnIfReceiveBufferSmall(const std::string& url);
+// Channel name with the configured prefix (lets a simulated and a real rig share a network).
+std::string channel(const Params& params, const std::string& base);
+
+// Channel names of the message contract (DESIGN.md).
+namespace channels {
+constexpr const char* kStereoFrame = "STEREO_FRAME";
+constexpr const char* kPtzState = "PTZ_STATE";
+constexpr const char* kPtzSetpoint = "PTZ_SETPOINT";
+constexpr const char* kSimTruth = "SIM_TRUTH";
+constexpr const char* kObjectDetections = "OBJECT_DETECTIONS";
+constexpr const char* kObjectPose = "OBJECT_POSE";
+constexpr const char* kPointCloud = "POINT_CLOUD";
+constexpr const char* kProcessStatusPrefix = "PROCESS_STATUS_";
+}  // namespace channels
+
+int64_t wallUtime();
+
+// Encodes an 8-bit BGR or gray image. jpeg_quality is used for ENCODING_JPEG only.
+ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality);
+// Decodes to BGR8 (or GRAY8). Returns false and says why for anything inconsistent.
+bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
+
+// Set by SIGINT/SIGTERM; processes poll it in their loop.
+class StopFlag {
+ public:
+  static void install();
+  static bool stopRequested();
+  static void request();
+};
+
+// Rates, latencies, drops and counters of one process, published at 1 Hz.
+class StatusReporter {
+ public:
+  StatusReporter(lcm::LCM* lcm, const Params& params, const std::string& process);
+
+  // latency_ms < 0: unknown.
+  void countIn(const std::string& channel, double latency_ms);
+  void countOut(const std::string& channel, double latency_ms);
+  void countDropped(const std::string& channel, const std::string& reason);
+  void increment(const std::string& counter, int64_t by = 1);
+  void setCounter(const std::string& counter, int64_t value);
+  int64_t counter(const std::string& name) const;
+  void setState(int8_t state, const std::string& message);
+  // Publishes when a period has passed; returns true when it did.
+  bool maybePublish();
+  void publishNow();
+  const std::string& channelName() const { return channel_; }
+
+ private:
+  struct ChannelStats {
+    int8_t direction = 0;
+    int64_t messages = 0;
+    int64_t dropped = 0;
+    int64_t messages_at_last_publish = 0;
+    std::vector<double> latencies_ms;
+  };
+  ChannelStats& stats(const std::string& channel, int8_t direction);
+
+  lcm::LCM* lcm_;
+  std::string process_;
+  std::string channel_;
+  std::string hostname_;
+  double period_s_;
+  int64_t start_utime_;
+  int64_t last_publish_utime_;
+  int8_t state_ = ptzstereo::process_status_t::STATE_OK;
+  std::string message_;
+  std::map<std::string, ChannelStats> channels_;
+  std::map<std::string, int64_t> counters_;
+};
+
+// Warns on stderr at most once per period per key, with the count since the last warning.
+class RateLimitedLog {
+ public:
+  explicit RateLimitedLog(double period_s = 5.0) : period_s_(period_s) {}
+  void warn(const std::string& key, const std::string& message);
+
+ private:
+  double period_s_;
+  std::map<std::string, std::pair<int64_t, int64_t>> last_;  // key -> (utime, suppressed)
+};
+
+// Percentile of a sample set (p in [0, 100]); NaN when empty.
+double percentile(std::vector<double> values, double p);
+
+}  // namespace ptz

@@ -1,0 +1,282 @@
+#include "ptz/transport.hpp"
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+namespace ptz {
+
+void addTransportParams(Params& params) {
+  params.add("lcm_url", "",
+             "LCM URL; empty: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0&recv_buf_size="
+             "4194304");
+  params.add("channel_prefix", "", "prefix of every channel name (e.g. SIM_)");
+  params.add("status_period_s", 1.0, "s", "period of the PROCESS_STATUS heartbeat");
+}
+
+std::string lcmUrl(const Params& params) {
+  std::string url = params.getString("lcm_url");
+  if (!url.empty()) return url;
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  if (env && *env) return env;
+  return kDefaultLcmUrl;
+}
+
+bool warnIfReceiveBufferSmall(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0) return true;
+  constexpr long kNeeded = 4194304;
+  long wanted = 0;
+  const auto pos = url.find("recv_buf_size=");
+  if (pos != std::string::npos) wanted = std::strtol(url.c_str() + pos + 14, nullptr, 10);
+  long rmem_max = -1;
+  if (FILE* f = std::fopen("/proc/sys/net/core/rmem_max", "r")) {
+    if (std::fscanf(f, "%ld", &rmem_max) != 1) rmem_max = -1;
+    std::fclose(f);
+  }
+  bool ok = true;
+  if (wanted < kNeeded) {
+    std::fprintf(stderr,
+                 "warning: LCM URL '%s' asks for a receive buffer below %ld bytes: raw VGA stereo "
+                 "frames will be lost. Add recv_buf_size=%ld to the URL.\n",
+                 url.c_str(), kNeeded, kNeeded);
+    ok = false;
+  }
+  if (rmem_max >= 0 && rmem_max < std::max(wanted, kNeeded)) {
+    std::fprintf(stderr,
+                 "warning: net.core.rmem_max is %ld, below %ld: the kernel caps the LCM receive "
+                 "buffer and raw stereo frames are lost. Fix: sudo sysctl -w "
+                 "net.core.rmem_max=%ld\n",
+                 rmem_max, std::max(wanted, kNeeded), std::max(wanted, kNeeded));
+    ok = false;
+  }
+  return ok;
+}
+
+std::string channel(const Params& params, const std::string& base) {
+  return params.getString("channel_prefix") + base;
+}
+
+int64_t wallUtime() {
+  using namespace std::chrono;
+  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality) {
+  CV_Assert(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3));
+  ptzstereo::image_t msg{};
+  msg.width = image.cols;
+  msg.height = image.rows;
+  msg.pixel_format =
+      image.channels() == 3 ? ptzstereo::image_t::PIXEL_BGR8 : ptzstereo::image_t::PIXEL_GRAY8;
+  msg.row_stride = image.cols * image.channels();
+  msg.encoding = encoding;
+  msg.zoom = 1.0;
+  if (encoding == ptzstereo::image_t::ENCODING_JPEG) {
+    cv::imencode(".jpg", image, msg.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+  } else {
+    msg.data.resize(static_cast<size_t>(msg.row_stride) * image.rows);
+    for (int r = 0; r < image.rows; ++r) {
+      std::copy(image.ptr<uint8_t>(r), image.ptr<uint8_t>(r) + msg.row_stride,
+                msg.data.begin() + static_cast<ptrdiff_t>(r) * msg.row_stride);
+    }
+  }
+  msg.data_size = static_cast<int32_t>(msg.data.size());
+  return msg;
+}
+
+bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error) {
+  int channels = 0;
+  switch (msg.pixel_format) {
+    case ptzstereo::image_t::PIXEL_GRAY8:
+      channels = 1;
+      break;
+    case ptzstereo::image_t::PIXEL_BGR8:
+    case ptzstereo::image_t::PIXEL_RGB8:
+      channels = 3;
+      break;
+    default:
+      *error = "unknown pixel_format " + std::to_string(msg.pixel_format);
+      return false;
+  }
+  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384) {
+    *error = "bad size " + std::to_string(msg.width) + "x" + std::to_string(msg.height);
+    return false;
+  }
+  if (msg.data_size != static_cast<int32_t>(msg.data.size())) {
+    *error = "data_size does not match data";
+    return false;
+  }
+  if (!std::isfinite(msg.pan_rad) || !std::isfinite(msg.tilt_rad) || !std::isfinite(msg.zoom)) {
+    *error = "non-finite pan/tilt/zoom";
+    return false;
+  }
+  if (msg.encoding == ptzstereo::image_t::ENCODING_RAW) {
+    if (msg.row_stride < msg.width * channels ||
+        static_cast<int64_t>(msg.row_stride) * msg.height > msg.data_size) {
+      *error = "raw data truncated or row_stride too small";
+      return false;
+    }
+    cv::Mat view(msg.height, msg.width, CV_8UC(channels), const_cast<uint8_t*>(msg.data.data()),
+                 static_cast<size_t>(msg.row_stride));
+    view.copyTo(*image);
+  } else if (msg.encoding == ptzstereo::image_t::ENCODING_JPEG) {
+    *image = cv::imdecode(msg.data, channels == 3 ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
+    if (image->empty()) {
+      *error = "JPEG data does not decode";
+      return false;
+    }
+    if (image->cols != msg.width || image->rows != msg.height) {
+      *error = "JPEG size differs from width/height";
+      return false;
+    }
+  } else {
+    *error = "unknown encoding " + std::to_string(msg.encoding);
+    return false;
+  }
+  if (msg.pixel_format == ptzstereo::image_t::PIXEL_RGB8) {
+    cv::cvtColor(*image, *image, cv::COLOR_RGB2BGR);
+  }
+  return true;
+}
+
+namespace {
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+}  // namespace
+
+void StopFlag::install() {
+  struct sigaction sa {};
+  sa.sa_handler = onSignal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+bool StopFlag::stopRequested() { return g_stop.load(); }
+void StopFlag::request() { g_stop = true; }
+
+StatusReporter::StatusReporter(lcm::LCM* lcm, const Params& params, const std::string& process)
+    : lcm_(lcm),
+      process_(process),
+      period_s_(params.getDouble("status_period_s")),
+      start_utime_(wallUtime()),
+      last_publish_utime_(start_utime_) {
+  std::string upper;
+  for (char c : process) upper += c == '-' ? '_' : static_cast<char>(std::toupper(c));
+  channel_ = channel(params, std::string(channels::kProcessStatusPrefix) + upper);
+  char host[256] = {};
+  gethostname(host, sizeof(host) - 1);
+  hostname_ = host;
+}
+
+StatusReporter::ChannelStats& StatusReporter::stats(const std::string& ch, int8_t direction) {
+  auto& s = channels_[ch + (direction ? ">" : "<")];
+  s.direction = direction;
+  return s;
+}
+
+void StatusReporter::countIn(const std::string& ch, double latency_ms) {
+  auto& s = stats(ch, ptzstereo::channel_status_t::DIRECTION_IN);
+  ++s.messages;
+  if (latency_ms >= 0 && s.latencies_ms.size() < 100000) s.latencies_ms.push_back(latency_ms);
+}
+
+void StatusReporter::countOut(const std::string& ch, double latency_ms) {
+  auto& s = stats(ch, ptzstereo::channel_status_t::DIRECTION_OUT);
+  ++s.messages;
+  if (latency_ms >= 0 && s.latencies_ms.size() < 100000) s.latencies_ms.push_back(latency_ms);
+}
+
+void StatusReporter::countDropped(const std::string& ch, const std::string& reason) {
+  ++stats(ch, ptzstereo::channel_status_t::DIRECTION_IN).dropped;
+  increment("dropped_" + reason);
+}
+
+void StatusReporter::increment(const std::string& name, int64_t by) { counters_[name] += by; }
+void StatusReporter::setCounter(const std::string& name, int64_t value) {
+  counters_[name] = value;
+}
+int64_t StatusReporter::counter(const std::string& name) const {
+  auto it = counters_.find(name);
+  return it == counters_.end() ? 0 : it->second;
+}
+
+void StatusReporter::setState(int8_t state, const std::string& message) {
+  state_ = state;
+  message_ = message;
+}
+
+bool StatusReporter::maybePublish() {
+  if (wallUtime() - last_publish_utime_ < static_cast<int64_t>(period_s_ * 1e6)) return false;
+  publishNow();
+  return true;
+}
+
+void StatusReporter::publishNow() {
+  const int64_t now = wallUtime();
+  const double period_s = std::max(1e-6, (now - last_publish_utime_) * 1e-6);
+  ptzstereo::process_status_t msg{};
+  msg.utime = now;
+  msg.process = process_;
+  msg.hostname = hostname_;
+  msg.pid = static_cast<int32_t>(getpid());
+  msg.uptime_s = (now - start_utime_) * 1e-6;
+  msg.state = state_;
+  msg.message = message_;
+  for (auto& [key, s] : channels_) {
+    ptzstereo::channel_status_t c{};
+    c.channel = key.substr(0, key.size() - 1);
+    c.direction = s.direction;
+    c.rate_hz = (s.messages - s.messages_at_last_publish) / period_s;
+    c.messages = s.messages;
+    c.dropped = s.dropped;
+    c.latency_ms_p50 = percentile(s.latencies_ms, 50);
+    c.latency_ms_p99 = percentile(s.latencies_ms, 99);
+    s.latencies_ms.clear();
+    s.messages_at_last_publish = s.messages;
+    msg.channels.push_back(c);
+  }
+  msg.num_channels = static_cast<int32_t>(msg.channels.size());
+  for (const auto& [name, value] : counters_) msg.counters.push_back({name, value});
+  msg.num_counters = static_cast<int32_t>(msg.counters.size());
+  lcm_->publish(channel_, &msg);
+  last_publish_utime_ = now;
+}
+
+void RateLimitedLog::warn(const std::string& key, const std::string& message) {
+  const int64_t now = wallUtime();
+  auto it = last_.find(key);
+  if (it != last_.end() && now - it->second.first < static_cast<int64_t>(period_s_ * 1e6)) {
+    ++it->second.second;
+    return;
+  }
+  const int64_t suppressed = it == last_.end() ? 0 : it->second.second;
+  if (suppressed > 0) {
+    std::fprintf(stderr, "warning: %s (%lld more like it since the last warning)\n",
+                 message.c_str(), static_cast<long long>(suppressed));
+  } else {
+    std::fprintf(stderr, "warning: %s\n", message.c_str());
+  }
+  last_[key] = {now, 0};
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * (v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(rank));
+  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(lo), v.end());
+  const double a = v[lo];
+  if (lo + 1 >= v.size()) return a;
+  const double b = *std::min_element(v.begin() + static_cast<ptrdiff_t>(lo) + 1, v.end());
+  return a + (rank - lo) * (b - a);
+}
+
+}  // namespace ptz

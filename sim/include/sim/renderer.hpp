@@ -1,0 +1,54 @@
+// Ray-casting renderer of the scene through a distorted pinhole camera. Each pixel's ray comes
+// from an undistortion map (cached per intrinsics), so lens distortion is exact, not a warp.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "ptz/rig.hpp"
+#include "sim/scene.hpp"
+
+namespace ptz::sim {
+
+class Renderer {
+ public:
+  explicit Renderer(const Scene& scene);
+
+  // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise).
+  void render(const CameraView& view, double t_s, cv::Mat* bgr);
+
+  // Per-pixel undistorted normalised coordinates (x/z, y/z) of a view's pixels (CV_32FC2).
+  const cv::Mat& rays(const CameraView& view);
+
+ private:
+  struct RayCache {
+    int width = 0, height = 0;
+    Intrinsics intrinsics;
+    cv::Mat rays;
+  };
+  void drawObject(const SceneObject& object, double t_s, const CameraView& view, const cv::Mat& rays,
+                  cv::Mat* bgr, cv::Mat* depth);
+  void drawChessboard(const CameraView& view, const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
+
+  const Scene& scene_;
+  cv::Mat backdrop_texture_;
+  cv::Mat floor_texture_;
+  std::vector<RayCache> caches_;
+};
+
+// Adds zero-mean Gaussian pixel noise from a bank drawn once (a random offset per frame), so the
+// noise costs a copy and stays deterministic for a given seed and frame index.
+class NoiseBank {
+ public:
+  NoiseBank(int width, int height, double sigma, unsigned seed);
+  void apply(uint64_t frame_index, int camera, cv::Mat* bgr) const;
+  double sigma() const { return sigma_; }
+
+ private:
+  double sigma_;
+  unsigned seed_;
+  cv::Mat bank_;  // CV_16SC3, larger than one image
+};
+
+}  // namespace ptz::sim

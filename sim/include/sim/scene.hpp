@@ -1,0 +1,70 @@
+// The simulated world in the head frame: a textured backdrop and floor, coloured objects on
+// trajectories, and an optional chessboard target for calibration.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+#include "ptz/config.hpp"
+
+namespace ptz::sim {
+
+struct Trajectory {
+  enum class Type { kStatic, kLine, kCircle, kFigureEight, kRandomWalk };
+  Type type = Type::kStatic;
+  Eigen::Vector3d centre_m = Eigen::Vector3d(0, 0, 3);
+  // Half-extent of the motion along x, y, z, m.
+  Eigen::Vector3d amplitude_m = Eigen::Vector3d::Zero();
+  double period_s = 20.0;
+  double phase_rad = 0.0;
+  unsigned seed = 1;  // random_walk only
+
+  Eigen::Vector3d position(double t_s) const;
+  Eigen::Vector3d velocity(double t_s) const;
+  static Type parseType(const std::string& name, const std::string& where);
+};
+
+struct SceneObject {
+  enum class Shape { kSphere, kBox };
+  std::string name;
+  std::string class_name;
+  Shape shape = Shape::kSphere;
+  double radius_m = 0.1;                                     // sphere
+  Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box
+  double yaw_rad = 0.0;                                      // box, about the head's y axis
+  cv::Vec3b color_bgr{0, 0, 220};
+  Trajectory trajectory;
+
+  double boundingRadius() const;
+};
+
+struct Chessboard {
+  bool present = false;
+  int inner_cols = 9;
+  int inner_rows = 6;
+  double square_m = 0.05;
+  // Board frame: x along the columns, y along the rows, z into the board.
+  Eigen::Matrix3d rotation_head_board = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d centre_head_m = Eigen::Vector3d(0, 0, 2);
+
+  // Head-frame positions of the inner corners, row by row (OpenCV's order).
+  std::vector<Eigen::Vector3d> innerCorners() const;
+};
+
+struct Scene {
+  double backdrop_distance_m = 8.0;  // plane z = d
+  double floor_height_m = 1.4;       // plane y = h (y points down)
+  double texture_m_per_texel = 0.01;
+  unsigned texture_seed = 7;
+  std::vector<SceneObject> objects;
+  Chessboard chessboard;
+
+  // Reads the config sections `scene`, `objects` and `chessboard`; errors name file and field.
+  static Scene fromConfig(const cv::FileNode& scene, const cv::FileNode& objects,
+                          const cv::FileNode& chessboard, const std::string& where);
+};
+
+}  // namespace ptz::sim

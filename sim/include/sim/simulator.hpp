@@ -1,0 +1,50 @@
+// The simulated rig without LCM: motors (PtzPlant), scene and rendering of both cameras.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <cstdint>
+#include <memory>
+
+#include "ptz/plant.hpp"
+#include "ptz/rig.hpp"
+#include "sim/renderer.hpp"
+#include "sim/scene.hpp"
+
+namespace ptz::sim {
+
+struct SimFrame {
+  int64_t index = 0;
+  double t_s = 0;
+  cv::Mat left, right;  // BGR8
+  PtzPose left_pose, right_pose;
+};
+
+class Simulator {
+ public:
+  Simulator(StereoRig rig, Scene scene, const PtzPlant::Params& plant, double noise_sigma,
+            unsigned seed);
+
+  // Renders both cameras at the current sim time and the current motor state.
+  SimFrame capture();
+  // A setpoint issued at sim time t_s (takes effect after the dead time).
+  void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped,
+               int* rejected);
+  void advanceTo(double t_s) { plant_.advanceTo(t_s); }
+  double time() const { return plant_.time(); }
+
+  const StereoRig& rig() const { return rig_; }
+  const Scene& scene() const { return *scene_; }
+  const PtzPlant& plant() const { return plant_; }
+  CameraView view(Side side) const { return rig_.view(side, plant_.pose(side)); }
+
+ private:
+  StereoRig rig_;
+  std::unique_ptr<Scene> scene_;  // the renderer keeps a reference: a stable address
+  PtzPlant plant_;
+  Renderer renderer_;
+  NoiseBank noise_;
+  int64_t next_index_ = 0;
+};
+
+}  // namespace ptz::sim

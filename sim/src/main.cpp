@@ -1,0 +1,266 @@
+// ptz-sim: renders the stereo pair and models the PTZ motors; speaks the same channels as
+// ptz-camera + ptz-driver. Clocks: realtime, or lockstep (sim time advances one frame once the
+// frame's consumer answered with a setpoint naming it, or after a timeout).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "ptz/transport.hpp"
+#include "ptzstereo/ptz_setpoint_t.hpp"
+#include "sim/simulator.hpp"
+#include "sim_messages.hpp"
+
+namespace ptz::sim {
+namespace {
+
+// Sim time 0 of a lockstep run, so that two runs give identical messages.
+constexpr int64_t kLockstepEpochUtime = 1'700'000'000'000'000;
+
+void declare(Params& p) {
+  addTransportParams(p);
+  addPlantParams(p);
+  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  p.add("clock", "realtime", "realtime or lockstep");
+  p.add("frame_rate_hz", 30.0, "Hz", "stereo frame rate (sim time)");
+  p.add("frames", 0, "", "stop after this many frames (0: no limit)");
+  p.add("duration_s", 0.0, "s", "stop after this much sim time (0: no limit)");
+  p.add("encoding", "raw", "image encoding in STEREO_FRAME: raw or jpeg");
+  p.add("jpeg_quality", 90, "", "JPEG quality 1..100");
+  p.add("noise_sigma", 2.0, "grey levels", "standard deviation of the pixel noise");
+  p.add("seed", 1, "", "seed of the pixel noise");
+  p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)");
+  p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time");
+  p.add("max_setpoint_age_ms", 500.0, "ms", "realtime: drop setpoints published longer ago");
+  p.addSection("scene", "backdrop_distance_m, floor_height_m, texture_m_per_texel, texture_seed");
+  p.addSection("objects", "list of {name, class, shape: sphere|box, radius_m | half_extents_m, "
+                          "color_bgr, trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
+  p.addSection("chessboard", "{inner_cols, inner_rows, square_m, centre_m, rotation_vector}");
+}
+
+class SimNode {
+ public:
+  SimNode(const Params& p, lcm::LCM* lcm)
+      : p_(p),
+        lcm_(lcm),
+        status_(lcm, p, "ptz-sim"),
+        lockstep_(p.getString("clock") == "lockstep"),
+        frame_period_s_(1.0 / p.getDouble("frame_rate_hz")),
+        state_period_s_(1.0 / p.getDouble("state_rate_hz")),
+        encoding_(p.getString("encoding") == "jpeg" ? ptzstereo::image_t::ENCODING_JPEG
+                                                     : ptzstereo::image_t::ENCODING_RAW),
+        ch_frame_(channel(p, channels::kStereoFrame)),
+        ch_state_(channel(p, channels::kPtzState)),
+        ch_truth_(channel(p, channels::kSimTruth)),
+        ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
+    const std::string where = p.configPath().empty() ? "flags" : "config file '" + p.configPath() + "'";
+    Scene scene = Scene::fromConfig(p.section("scene"), p.section("objects"),
+                                    p.section("chessboard"), where);
+    StereoRig rig = p.getString("rig_file").empty() ? StereoRig::makeDefault()
+                                                    : StereoRig::load(p.getString("rig_file"));
+    sim_ = std::make_unique<Simulator>(std::move(rig), std::move(scene), plantParamsFrom(p),
+                                       p.getDouble("noise_sigma"),
+                                       static_cast<unsigned>(p.getInt("seed")));
+    lcm_->subscribe(ch_setpoint_, &SimNode::onSetpoint, this);
+    start_wall_utime_ = wallUtime();
+    start_steady_ = std::chrono::steady_clock::now();
+  }
+
+  int run() {
+    const int max_frames = p_.getInt("frames");
+    const double duration_s = p_.getDouble("duration_s");
+    for (int64_t n = 0; !StopFlag::stopRequested(); ++n) {
+      const double t_frame = n * frame_period_s_;
+      if ((max_frames > 0 && n >= max_frames) || (duration_s > 0 && t_frame > duration_s)) break;
+      if (lockstep_) {
+        advanceWithStates(t_frame);
+      } else if (!waitRealtime(t_frame)) {
+        continue;  // too late for this frame: skip it
+      }
+      publishFrame();
+      if (lockstep_) awaitAnswer(n);
+      status_.maybePublish();
+    }
+    status_.publishNow();
+    std::printf("ptz-sim: %lld frames published, %lld setpoints applied\n",
+                static_cast<long long>(status_.counter("frames_published")),
+                static_cast<long long>(status_.counter("setpoints_applied")));
+    return 0;
+  }
+
+ private:
+  int64_t simUtime(double t_s) const {
+    return (lockstep_ ? kLockstepEpochUtime : start_wall_utime_) + std::llround(t_s * 1e6);
+  }
+  double realtimeNow() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_steady_).count();
+  }
+
+  // Advances the motors to t_s, publishing PTZ_STATE at every state period on the way.
+  void advanceWithStates(double t_s) {
+    while (next_state_t_ <= t_s) {
+      sim_->advanceTo(next_state_t_);
+      publishState();
+      next_state_t_ += state_period_s_;
+    }
+    sim_->advanceTo(t_s);
+  }
+
+  // Realtime: serve setpoints and states until the frame's time; false if it is long past.
+  bool waitRealtime(double t_frame) {
+    for (;;) {
+      const double now = realtimeNow();
+      if (now >= t_frame) {
+        if (now - t_frame > frame_period_s_) {
+          status_.increment("frames_skipped_late");
+          return false;
+        }
+        advanceWithStates(t_frame);
+        return true;
+      }
+      const double until = std::min(t_frame, next_state_t_);
+      if (now >= next_state_t_) {
+        advanceWithStates(now);
+        continue;
+      }
+      lcm_->handleTimeout(std::max(1, static_cast<int>((until - now) * 1000)));
+      status_.maybePublish();
+    }
+  }
+
+  void publishState() {
+    ptzstereo::ptz_state_t msg = makeStateMessage(sim_->plant(), simUtime(sim_->time()));
+    msg.setpoint_utime = last_setpoint_utime_;
+    msg.publish_utime = wallUtime();
+    lcm_->publish(ch_state_, &msg);
+    status_.countOut(ch_state_, -1);
+  }
+
+  void publishFrame() {
+    const SimFrame frame = sim_->capture();
+    current_frame_t_ = frame.t_s;
+    const int64_t utime = simUtime(frame.t_s);
+    ptzstereo::stereo_frame_t msg =
+        makeFrameMessage(frame, utime, encoding_, p_.getInt("jpeg_quality"));
+    const int64_t now = wallUtime();
+    msg.publish_utime = now;
+    lcm_->publish(ch_frame_, &msg);
+    status_.countOut(ch_frame_, lockstep_ ? -1 : (now - utime) / 1000.0);
+    status_.increment("frames_published");
+    ptzstereo::sim_truth_t truth = makeTruthMessage(*sim_, frame, utime);
+    truth.publish_utime = wallUtime();
+    lcm_->publish(ch_truth_, &truth);
+    status_.countOut(ch_truth_, -1);
+  }
+
+  void awaitAnswer(int64_t seq) {
+    awaiting_seq_ = seq;
+    answered_ = false;
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::microseconds(
+                              static_cast<int64_t>(p_.getDouble("lockstep_timeout_ms") * 1000));
+    while (!answered_ && !StopFlag::stopRequested()) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+                            deadline - std::chrono::steady_clock::now())
+                            .count();
+      if (left <= 0) {
+        status_.increment("lockstep_timeouts");
+        break;
+      }
+      lcm_->handleTimeout(static_cast<int>(std::min<int64_t>(left, 100)));
+      status_.maybePublish();
+    }
+    awaiting_seq_ = -1;
+  }
+
+  void onSetpoint(const lcm::ReceiveBuffer*, const std::string& ch,
+                  const ptzstereo::ptz_setpoint_t* msg) {
+    double t_apply;
+    if (lockstep_) {
+      if (msg->frame_seq >= 0 && msg->frame_seq != awaiting_seq_) {
+        status_.countDropped(ch, "setpoint_stale");
+        return;
+      }
+      // The answer to frame n is issued at that frame's capture time; tau delays it.
+      t_apply = msg->frame_seq >= 0 ? current_frame_t_ : sim_->time();
+    } else {
+      const double age_ms = (wallUtime() - msg->publish_utime) / 1000.0;
+      if (age_ms > p_.getDouble("max_setpoint_age_ms")) {
+        status_.countDropped(ch, "setpoint_stale");
+        return;
+      }
+      t_apply = std::max(sim_->time(), realtimeNow());
+      advanceWithStates(t_apply);
+    }
+    int clamped = 0, rejected = 0;
+    const PtzPose l{msg->left.pan_rad, msg->left.tilt_rad, msg->left.zoom};
+    const PtzPose r{msg->right.pan_rad, msg->right.tilt_rad, msg->right.zoom};
+    sim_->command(t_apply, l, r, &clamped, &rejected);
+    status_.countIn(ch, lockstep_ ? -1 : (wallUtime() - msg->utime) / 1000.0);
+    status_.increment("setpoints_applied");
+    if (clamped) status_.increment("setpoint_values_clamped", clamped);
+    if (rejected) {
+      status_.increment("setpoint_values_rejected", rejected);
+      log_.warn("rejected", "ptz-sim: setpoint with non-finite values; those axes hold");
+    }
+    if (clamped) log_.warn("clamped", "ptz-sim: setpoint outside the limits; clamped");
+    last_setpoint_utime_ = msg->utime;
+    if (msg->frame_seq == awaiting_seq_) answered_ = true;
+  }
+
+  const Params& p_;
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  bool lockstep_;
+  double frame_period_s_, state_period_s_;
+  int8_t encoding_;
+  std::string ch_frame_, ch_state_, ch_truth_, ch_setpoint_;
+  std::unique_ptr<Simulator> sim_;
+  int64_t start_wall_utime_ = 0;
+  std::chrono::steady_clock::time_point start_steady_;
+  double next_state_t_ = 0;
+  double current_frame_t_ = 0;
+  int64_t awaiting_seq_ = -1;
+  bool answered_ = false;
+  int64_t last_setpoint_utime_ = 0;
+};
+
+}  // namespace
+}  // namespace ptz::sim
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-sim", "Simulated PTZ stereo rig: renders STEREO_FRAME, models the motors "
+                           "(PT1 + dead time), publishes PTZ_STATE and SIM_TRUTH, applies "
+                           "PTZ_SETPOINT.");
+  sim::declare(params);
+  try {
+    if (!params.parse(argc, argv)) return 0;
+    const std::string clock = params.getString("clock");
+    const std::string enc = params.getString("encoding");
+    if (clock != "realtime" && clock != "lockstep") {
+      throw ConfigError("parameter 'clock' must be realtime or lockstep, got '" + clock + "'");
+    }
+    if (enc != "raw" && enc != "jpeg") {
+      throw ConfigError("parameter 'encoding' must be raw or jpeg, got '" + enc + "'");
+    }
+    if (!(params.getDouble("frame_rate_hz") > 0) || !(params.getDouble("state_rate_hz") > 0)) {
+      throw ConfigError("parameters 'frame_rate_hz' and 'state_rate_hz' must be > 0");
+    }
+    const std::string url = lcmUrl(params);
+    warnIfReceiveBufferSmall(url);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) {
+      std::fprintf(stderr, "ptz-sim: cannot open LCM at '%s' (multicast route? see "
+                           "scripts/check-network)\n", url.c_str());
+      return 1;
+    }
+    StopFlag::install();
+    sim::SimNode node(params, &lcm);
+    return node.run();
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "ptz-sim: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,327 @@
+#include "sim/renderer.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ptz::sim {
+namespace {
+
+constexpr int kTextureSize = 1024;  // a power of two: wrap-around by masking
+constexpr int kGridStep = 4;        // undistortion solved every 4 px, interpolated between
+
+// Low-saturation multi-scale noise with a few darker patches: texture for block matching that
+// does not look like any object colour.
+cv::Mat makeTexture(unsigned seed, cv::Vec3f tint) {
+  cv::RNG rng(seed);
+  cv::Mat acc(kTextureSize, kTextureSize, CV_32F, cv::Scalar(0));
+  float weight = 1.0f;
+  for (int cells = 8; cells <= 512; cells *= 2) {
+    // Wrap-padded before upsampling, so the texture tiles without seams.
+    cv::Mat small(cells, cells, CV_32F), padded, big;
+    rng.fill(small, cv::RNG::UNIFORM, -1.0, 1.0);
+    cv::copyMakeBorder(small, padded, 2, 2, 2, 2, cv::BORDER_WRAP);
+    const int scale = kTextureSize / cells;
+    cv::resize(padded, big, padded.size() * scale, 0, 0, cv::INTER_CUBIC);
+    acc += weight * big(cv::Rect(2 * scale, 2 * scale, kTextureSize, kTextureSize));
+    weight *= 0.75f;
+  }
+  cv::normalize(acc, acc, 40, 215, cv::NORM_MINMAX);
+  cv::Mat out(kTextureSize, kTextureSize, CV_8UC3);
+  for (int r = 0; r < kTextureSize; ++r) {
+    for (int c = 0; c < kTextureSize; ++c) {
+      const float v = acc.at<float>(r, c);
+      out.at<cv::Vec3b>(r, c) = cv::Vec3b(cv::saturate_cast<uchar>(v * tint[0]),
+                                          cv::saturate_cast<uchar>(v * tint[1]),
+                                          cv::saturate_cast<uchar>(v * tint[2]));
+    }
+  }
+  return out;
+}
+
+inline cv::Vec3b sampleTexture(const cv::Mat& tex, float u, float v) {
+  const int iu = static_cast<int>(std::floor(u));
+  const int iv = static_cast<int>(std::floor(v));
+  const float fu = u - iu, fv = v - iv;
+  const int m = kTextureSize - 1;
+  const cv::Vec3b* r0 = tex.ptr<cv::Vec3b>(iv & m);
+  const cv::Vec3b* r1 = tex.ptr<cv::Vec3b>((iv + 1) & m);
+  const cv::Vec3b& a = r0[iu & m];
+  const cv::Vec3b& b = r0[(iu + 1) & m];
+  const cv::Vec3b& c = r1[iu & m];
+  const cv::Vec3b& d = r1[(iu + 1) & m];
+  cv::Vec3b out;
+  for (int k = 0; k < 3; ++k) {
+    const float top = a[k] + fu * (b[k] - a[k]);
+    const float bottom = c[k] + fu * (d[k] - c[k]);
+    out[k] = static_cast<uchar>(top + fv * (bottom - top) + 0.5f);
+  }
+  return out;
+}
+
+bool sameIntrinsics(const Intrinsics& a, const Intrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy &&
+         a.distortion == b.distortion;
+}
+
+cv::Vec3b shade(const cv::Vec3b& base, const Eigen::Vector3d& normal) {
+  static const Eigen::Vector3d kToLight = Eigen::Vector3d(-0.3, -0.8, -0.5).normalized();
+  const double intensity = 0.45 + 0.55 * std::max(0.0, normal.dot(kToLight));
+  return cv::Vec3b(cv::saturate_cast<uchar>(base[0] * intensity),
+                   cv::saturate_cast<uchar>(base[1] * intensity),
+                   cv::saturate_cast<uchar>(base[2] * intensity));
+}
+
+// Pixel rectangle that holds the image of a sphere of radius r around p (head frame): the
+// projections of a slightly larger sphere's surface, padded.
+cv::Rect boundingRect(const CameraView& view, const Eigen::Vector3d& p, double r) {
+  const Eigen::Vector3d pc = view.toCamera(p);
+  const cv::Rect whole(0, 0, view.width, view.height);
+  if (pc.z() + r <= 0) return {};
+  double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
+  for (int i = 0; i <= 8; ++i) {
+    const double lat = M_PI * i / 8 - M_PI / 2;
+    for (int j = 0; j < 16; ++j) {
+      const double lon = 2 * M_PI * j / 16;
+      const Eigen::Vector3d q =
+          pc + 1.25 * r *
+                   Eigen::Vector3d(std::cos(lat) * std::cos(lon), std::sin(lat),
+                                   std::cos(lat) * std::sin(lon));
+      if (q.z() <= 1e-3) return whole;
+      const Eigen::Vector2d px = view.projectCamera(q);
+      u0 = std::min(u0, px.x());
+      v0 = std::min(v0, px.y());
+      u1 = std::max(u1, px.x());
+      v1 = std::max(v1, px.y());
+    }
+  }
+  const double pad = 2 + 0.1 * std::max(u1 - u0, v1 - v0);
+  const cv::Point top_left(static_cast<int>(std::floor(std::max(u0 - pad, -1.0))),
+                           static_cast<int>(std::floor(std::max(v0 - pad, -1.0))));
+  const cv::Point bottom_right(static_cast<int>(std::ceil(std::min(u1 + pad, view.width + 1.0))),
+                               static_cast<int>(std::ceil(std::min(v1 + pad, view.height + 1.0))));
+  return cv::Rect(top_left, bottom_right) & whole;
+}
+
+}  // namespace
+
+Renderer::Renderer(const Scene& scene)
+    : scene_(scene),
+      backdrop_texture_(makeTexture(scene.texture_seed, {0.95f, 1.0f, 1.05f})),
+      floor_texture_(makeTexture(scene.texture_seed + 1, {0.85f, 0.95f, 1.05f})) {}
+
+const cv::Mat& Renderer::rays(const CameraView& view) {
+  for (auto& c : caches_) {
+    if (c.width == view.width && c.height == view.height &&
+        sameIntrinsics(c.intrinsics, view.intrinsics)) {
+      return c.rays;
+    }
+  }
+  const Intrinsics& k = view.intrinsics;
+  const int gw = view.width / kGridStep + 2, gh = view.height / kGridStep + 2;
+  std::vector<cv::Point2f> grid;
+  grid.reserve(static_cast<size_t>(gw * gh));
+  for (int j = 0; j < gh; ++j) {
+    for (int i = 0; i < gw; ++i) grid.emplace_back(i * kGridStep, j * kGridStep);
+  }
+  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  std::vector<cv::Point2f> undistorted;
+  cv::undistortPoints(grid, undistorted, K, cv::Mat(k.distortion, true), cv::noArray(),
+                      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
+  RayCache cache{view.width, view.height, k, cv::Mat(view.height, view.width, CV_32FC2)};
+  for (int v = 0; v < view.height; ++v) {
+    const int j = v / kGridStep;
+    const float fv = static_cast<float>(v - j * kGridStep) / kGridStep;
+    cv::Vec2f* row = cache.rays.ptr<cv::Vec2f>(v);
+    for (int u = 0; u < view.width; ++u) {
+      const int i = u / kGridStep;
+      const float fu = static_cast<float>(u - i * kGridStep) / kGridStep;
+      const cv::Point2f& a = undistorted[j * gw + i];
+      const cv::Point2f& b = undistorted[j * gw + i + 1];
+      const cv::Point2f& c = undistorted[(j + 1) * gw + i];
+      const cv::Point2f& d = undistorted[(j + 1) * gw + i + 1];
+      const cv::Point2f top = a + fu * (b - a), bottom = c + fu * (d - c);
+      const cv::Point2f p = top + fv * (bottom - top);
+      row[u] = cv::Vec2f(p.x, p.y);
+    }
+  }
+  if (caches_.size() >= 4) caches_.erase(caches_.begin());
+  caches_.push_back(std::move(cache));
+  return caches_.back().rays;
+}
+
+void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr) {
+  const cv::Mat& ray_map = rays(view);
+  bgr->create(view.height, view.width, CV_8UC3);
+  cv::Mat depth(view.height, view.width, CV_32F);
+  const Eigen::Matrix3f R = view.rotation_head_camera.cast<float>();
+  const Eigen::Vector3f C = view.position_head_m.cast<float>();
+  const float zb = static_cast<float>(scene_.backdrop_distance_m);
+  const float yf = static_cast<float>(scene_.floor_height_m);
+  const float inv_texel = static_cast<float>(1.0 / scene_.texture_m_per_texel);
+  const cv::Vec3b sky(200, 190, 180);
+  for (int v = 0; v < view.height; ++v) {
+    const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
+    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+    float* out_depth = depth.ptr<float>(v);
+    for (int u = 0; u < view.width; ++u) {
+      const Eigen::Vector3f d = R * Eigen::Vector3f(ray_row[u][0], ray_row[u][1], 1.0f);
+      float t = std::numeric_limits<float>::infinity();
+      cv::Vec3b colour = sky;
+      if (d.y() > 0) {
+        const float tf = (yf - C.y()) / d.y();
+        const float z = C.z() + tf * d.z();
+        if (tf > 0 && z < zb) {
+          t = tf;
+          colour = sampleTexture(floor_texture_, (C.x() + tf * d.x()) * inv_texel, z * inv_texel);
+        }
+      }
+      if (!std::isfinite(t) && d.z() > 0) {
+        const float tb = (zb - C.z()) / d.z();
+        if (tb > 0) {
+          t = tb;
+          colour = sampleTexture(backdrop_texture_, (C.x() + tb * d.x()) * inv_texel,
+                                 (C.y() + tb * d.y()) * inv_texel);
+        }
+      }
+      out[u] = colour;
+      out_depth[u] = t;
+    }
+  }
+  if (scene_.chessboard.present) drawChessboard(view, ray_map, bgr, &depth);
+  for (const auto& object : scene_.objects) drawObject(object, t_s, view, ray_map, bgr, &depth);
+}
+
+void Renderer::drawObject(const SceneObject& object, double t_s, const CameraView& view,
+                          const cv::Mat& ray_map, cv::Mat* bgr, cv::Mat* depth) {
+  const Eigen::Vector3d centre = object.trajectory.position(t_s);
+  const cv::Rect rect = boundingRect(view, centre, object.boundingRadius());
+  if (rect.empty()) return;
+  const Eigen::Matrix3d& R = view.rotation_head_camera;
+  const Eigen::Vector3d C = view.position_head_m;
+  const Eigen::Vector3d oc = C - centre;
+  const Eigen::Matrix3d box_to_head =
+      Eigen::AngleAxisd(object.yaw_rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Vector3d oc_box = box_to_head.transpose() * oc;
+  for (int v = rect.y; v < rect.y + rect.height; ++v) {
+    const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
+    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+    float* out_depth = depth->ptr<float>(v);
+    for (int u = rect.x; u < rect.x + rect.width; ++u) {
+      const Eigen::Vector3d d = R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1.0);
+      double t = -1;
+      Eigen::Vector3d normal;
+      if (object.shape == SceneObject::Shape::kSphere) {
+        const double b = oc.dot(d), a = d.squaredNorm();
+        const double disc = b * b - a * (oc.squaredNorm() - object.radius_m * object.radius_m);
+        if (disc < 0) continue;
+        t = (-b - std::sqrt(disc)) / a;
+        normal = (oc + t * d) / object.radius_m;
+      } else {
+        const Eigen::Vector3d db = box_to_head.transpose() * d;
+        double t_near = -1e30, t_far = 1e30;
+        int axis = -1;
+        for (int k = 0; k < 3; ++k) {
+          if (std::abs(db[k]) < 1e-12) {
+            if (std::abs(oc_box[k]) > object.half_extents_m[k]) t_far = -1;
+            continue;
+          }
+          double t0 = (-object.half_extents_m[k] - oc_box[k]) / db[k];
+          double t1 = (object.half_extents_m[k] - oc_box[k]) / db[k];
+          if (t0 > t1) std::swap(t0, t1);
+          if (t0 > t_near) {
+            t_near = t0;
+            axis = k;
+          }
+          t_far = std::min(t_far, t1);
+        }
+        if (t_near > t_far || axis < 0) continue;
+        t = t_near;
+        Eigen::Vector3d n_box = Eigen::Vector3d::Zero();
+        n_box[axis] = db[axis] > 0 ? -1 : 1;
+        normal = box_to_head * n_box;
+      }
+      if (t <= 0 || t >= out_depth[u]) continue;
+      out_depth[u] = static_cast<float>(t);
+      out[u] = shade(object.color_bgr, normal);
+    }
+  }
+}
+
+void Renderer::drawChessboard(const CameraView& view, const cv::Mat& ray_map, cv::Mat* bgr,
+                              cv::Mat* depth) {
+  const Chessboard& b = scene_.chessboard;
+  // The board with a white margin of one square around the (inner + 1) squares.
+  const double half_w = (b.inner_cols + 3) * b.square_m / 2;
+  const double half_h = (b.inner_rows + 3) * b.square_m / 2;
+  const cv::Rect rect = boundingRect(view, b.centre_head_m, std::hypot(half_w, half_h));
+  if (rect.empty()) return;
+  const Eigen::Matrix3d& R = view.rotation_head_camera;
+  const Eigen::Matrix3d Rb = b.rotation_head_board.transpose();
+  const Eigen::Vector3d o = Rb * (view.position_head_m - b.centre_head_m);
+  // Corner (0,0) of the squares grid sits at -(inner + 1)/2 squares from the centre.
+  const double x0 = -(b.inner_cols + 1) * b.square_m / 2, y0 = -(b.inner_rows + 1) * b.square_m / 2;
+  constexpr int kSub = 4;  // supersampling so corner positions are sub-pixel exact
+  for (int v = rect.y; v < rect.y + rect.height; ++v) {
+    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+    float* out_depth = depth->ptr<float>(v);
+    for (int u = rect.x; u < rect.x + rect.width; ++u) {
+      int hits = 0, white = 0;
+      double t_centre = -1;
+      // Rays between pixel centres: interpolate the ray map.
+      const int u1 = std::min(u + 1, view.width - 1), v1 = std::min(v + 1, view.height - 1);
+      const int u0 = std::max(u - 1, 0), v0 = std::max(v - 1, 0);
+      const cv::Vec2f& rc = ray_map.at<cv::Vec2f>(v, u);
+      const cv::Vec2f gx = (ray_map.at<cv::Vec2f>(v, u1) - ray_map.at<cv::Vec2f>(v, u0)) *
+                           (1.0f / static_cast<float>(std::max(1, u1 - u0)));
+      const cv::Vec2f gy = (ray_map.at<cv::Vec2f>(v1, u) - ray_map.at<cv::Vec2f>(v0, u)) *
+                           (1.0f / static_cast<float>(std::max(1, v1 - v0)));
+      for (int s = 0; s < kSub * kSub; ++s) {
+        const double du = ((s % kSub) + 0.5) / kSub - 0.5, dv = ((s / kSub) + 0.5) / kSub - 0.5;
+        const cv::Vec2f r = rc + gx * static_cast<float>(du) + gy * static_cast<float>(dv);
+        const Eigen::Vector3d d = Rb * (R * Eigen::Vector3d(r[0], r[1], 1.0));
+        if (std::abs(d.z()) < 1e-12) continue;
+        const double t = -o.z() / d.z();
+        if (t <= 0) continue;
+        const double x = o.x() + t * d.x(), y = o.y() + t * d.y();
+        if (std::abs(x) > half_w || std::abs(y) > half_h) continue;
+        ++hits;
+        if (t_centre < 0) t_centre = t;
+        const int cx = static_cast<int>(std::floor((x - x0) / b.square_m));
+        const int cy = static_cast<int>(std::floor((y - y0) / b.square_m));
+        const bool inside = cx >= 0 && cy >= 0 && cx <= b.inner_cols && cy <= b.inner_rows;
+        if (!inside || ((cx + cy) % 2 == 1)) ++white;
+      }
+      if (hits == 0 || t_centre >= out_depth[u]) continue;
+      const double coverage = static_cast<double>(hits) / (kSub * kSub);
+      const double level = 20 + 215.0 * white / hits;
+      for (int k = 0; k < 3; ++k) {
+        out[u][k] = cv::saturate_cast<uchar>(coverage * level + (1 - coverage) * out[u][k]);
+      }
+      out_depth[u] = static_cast<float>(t_centre);
+    }
+  }
+}
+
+NoiseBank::NoiseBank(int width, int height, double sigma, unsigned seed)
+    : sigma_(sigma), seed_(seed) {
+  if (sigma <= 0) return;
+  cv::RNG rng(seed);
+  bank_.create(height + 64, width + 64, CV_16SC3);
+  rng.fill(bank_, cv::RNG::NORMAL, 0.0, sigma);
+}
+
+void NoiseBank::apply(uint64_t frame_index, int camera, cv::Mat* bgr) const {
+  if (bank_.empty()) return;
+  cv::RNG rng(seed_ ^ (frame_index * 2654435761ULL) ^ (static_cast<uint64_t>(camera) << 40));
+  const int dx = rng.uniform(0, 64), dy = rng.uniform(0, 64);
+  const cv::Mat slice = bank_(cv::Rect(dx, dy, bgr->cols, bgr->rows));
+  cv::add(*bgr, slice, *bgr, cv::noArray(), CV_8U);
+}
+
+}  // namespace ptz::sim

@@ -1,0 +1,162 @@
+#include "sim/scene.hpp"
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <random>
+
+namespace ptz::sim {
+
+Trajectory::Type Trajectory::parseType(const std::string& name, const std::string& where) {
+  if (name == "static") return Type::kStatic;
+  if (name == "line") return Type::kLine;
+  if (name == "circle") return Type::kCircle;
+  if (name == "figure_eight") return Type::kFigureEight;
+  if (name == "random_walk") return Type::kRandomWalk;
+  throw ConfigError(where + ": field 'trajectory' must be one of static, line, circle, "
+                            "figure_eight, random_walk (got '" + name + "')");
+}
+
+Eigen::Vector3d Trajectory::position(double t) const {
+  const double w = 2 * M_PI / period_s;
+  const double a = w * t + phase_rad;
+  const Eigen::Vector3d& A = amplitude_m;
+  switch (type) {
+    case Type::kStatic:
+      return centre_m;
+    case Type::kLine: {
+      // Back and forth between centre - A and centre + A, at constant speed.
+      const double s = std::asin(std::sin(a)) * 2 / M_PI;
+      return centre_m + s * A;
+    }
+    case Type::kCircle:
+      return centre_m + Eigen::Vector3d(A.x() * std::cos(a), A.y() * std::sin(a), A.z() * std::sin(a));
+    case Type::kFigureEight:
+      return centre_m +
+             Eigen::Vector3d(A.x() * std::sin(a), A.y() * std::sin(2 * a), A.z() * std::sin(2 * a));
+    case Type::kRandomWalk: {
+      // A band-limited random path: a seeded sum of sinusoids, smooth and within +-A.
+      std::mt19937 rng(seed);
+      std::uniform_real_distribution<double> freq(0.3, 1.5), phase(0, 2 * M_PI);
+      Eigen::Vector3d p = centre_m;
+      constexpr int kTerms = 4;
+      for (int axis = 0; axis < 3; ++axis) {
+        double sum = 0;
+        for (int k = 0; k < kTerms; ++k) sum += std::sin(freq(rng) * w * t + phase(rng));
+        p[axis] += A[axis] * sum / kTerms;
+      }
+      return p;
+    }
+  }
+  return centre_m;
+}
+
+Eigen::Vector3d Trajectory::velocity(double t) const {
+  constexpr double h = 1e-4;
+  return (position(t + h) - position(t - h)) / (2 * h);
+}
+
+double SceneObject::boundingRadius() const {
+  return shape == Shape::kSphere ? radius_m : half_extents_m.norm();
+}
+
+std::vector<Eigen::Vector3d> Chessboard::innerCorners() const {
+  std::vector<Eigen::Vector3d> corners;
+  for (int r = 0; r < inner_rows; ++r) {
+    for (int c = 0; c < inner_cols; ++c) {
+      const Eigen::Vector3d b((c - (inner_cols - 1) / 2.0) * square_m,
+                              (r - (inner_rows - 1) / 2.0) * square_m, 0);
+      corners.push_back(centre_head_m + rotation_head_board * b);
+    }
+  }
+  return corners;
+}
+
+namespace {
+
+Eigen::Vector3d vec3(const cv::FileNode& n, const std::string& field, const std::string& where,
+                     const Eigen::Vector3d& fallback) {
+  if (n[field].empty()) return fallback;
+  auto v = readNumbers(n, field, 3, where);
+  return {v[0], v[1], v[2]};
+}
+
+double optDouble(const cv::FileNode& n, const std::string& field, const std::string& where,
+                 double fallback) {
+  return n[field].empty() ? fallback : readDouble(n, field, where);
+}
+
+}  // namespace
+
+Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& objects,
+                        const cv::FileNode& board, const std::string& where) {
+  Scene scene;
+  if (!scene_node.empty()) {
+    const std::string w = where + ", scene";
+    scene.backdrop_distance_m = optDouble(scene_node, "backdrop_distance_m", w, 8.0);
+    scene.floor_height_m = optDouble(scene_node, "floor_height_m", w, 1.4);
+    scene.texture_m_per_texel = optDouble(scene_node, "texture_m_per_texel", w, 0.01);
+    if (!scene_node["texture_seed"].empty()) {
+      scene.texture_seed = static_cast<unsigned>(readInt(scene_node, "texture_seed", w));
+    }
+    if (scene.backdrop_distance_m <= 0.5 || scene.texture_m_per_texel <= 0) {
+      throw ConfigError(w + ": backdrop_distance_m must exceed 0.5 and texture_m_per_texel be > 0");
+    }
+  }
+  if (!objects.empty()) {
+    if (!objects.isSeq()) throw ConfigError(where + ": field 'objects' must be a list");
+    int i = 0;
+    for (const auto& n : objects) {
+      const std::string w = where + ", objects[" + std::to_string(i++) + "]";
+      SceneObject o;
+      o.name = readString(n, "name", w);
+      o.class_name = readString(n, "class", w);
+      const std::string shape = readString(n, "shape", w);
+      if (shape == "sphere") {
+        o.shape = SceneObject::Shape::kSphere;
+        o.radius_m = readDouble(n, "radius_m", w);
+        if (o.radius_m <= 0) throw ConfigError(w + ": field 'radius_m' must be > 0");
+      } else if (shape == "box") {
+        o.shape = SceneObject::Shape::kBox;
+        o.half_extents_m = vec3(n, "half_extents_m", w, Eigen::Vector3d::Zero());
+        if ((o.half_extents_m.array() <= 0).any()) {
+          throw ConfigError(w + ": field 'half_extents_m' must be three numbers > 0");
+        }
+        o.yaw_rad = optDouble(n, "yaw_rad", w, 0.0);
+      } else {
+        throw ConfigError(w + ": field 'shape' must be sphere or box (got '" + shape + "')");
+      }
+      auto bgr = readNumbers(n, "color_bgr", 3, w);
+      for (int k = 0; k < 3; ++k) {
+        if (bgr[k] < 0 || bgr[k] > 255) throw ConfigError(w + ": field 'color_bgr' must be 0..255");
+        o.color_bgr[k] = static_cast<uchar>(bgr[k]);
+      }
+      Trajectory& t = o.trajectory;
+      t.type = Trajectory::parseType(n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
+      t.centre_m = vec3(n, "centre_m", w, t.centre_m);
+      t.amplitude_m = vec3(n, "amplitude_m", w, t.amplitude_m);
+      t.period_s = optDouble(n, "period_s", w, t.period_s);
+      t.phase_rad = optDouble(n, "phase_rad", w, 0.0);
+      if (!n["seed"].empty()) t.seed = static_cast<unsigned>(readInt(n, "seed", w));
+      if (t.period_s <= 0) throw ConfigError(w + ": field 'period_s' must be > 0");
+      scene.objects.push_back(o);
+    }
+  }
+  if (!board.empty()) {
+    const std::string w = where + ", chessboard";
+    Chessboard& b = scene.chessboard;
+    b.present = true;
+    b.inner_cols = readInt(board, "inner_cols", w);
+    b.inner_rows = readInt(board, "inner_rows", w);
+    b.square_m = readDouble(board, "square_m", w);
+    b.centre_head_m = vec3(board, "centre_m", w, b.centre_head_m);
+    const Eigen::Vector3d rvec = vec3(board, "rotation_vector", w, Eigen::Vector3d::Zero());
+    if (rvec.norm() > 0) b.rotation_head_board = Eigen::AngleAxisd(rvec.norm(), rvec.normalized());
+    if (b.inner_cols < 2 || b.inner_rows < 2 || b.square_m <= 0) {
+      throw ConfigError(w + ": needs inner_cols, inner_rows >= 2 and square_m > 0");
+    }
+  }
+  return scene;
+}
+
+}  // namespace ptz::sim
