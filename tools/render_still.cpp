@@ -10,8 +10,9 @@
 
 int main(int argc, char** argv) {
   using namespace ptz;
-  Params p("ptz-render-still", "Renders the stereo pair of a ptz-sim scenario at one time and "
-                               "pose to <out>_left.png and <out>_right.png.");
+  Params p("ptz-render-still",
+           "Renders the stereo pair of a ptz-sim scenario at one time and "
+           "pose to <out>_left.png and <out>_right.png.");
   addPlantParams(p);
   p.add("rig_file", "", "rig file; empty: the built-in default rig");
   p.add("time_s", 0.0, "s", "scene time");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iomanip>
 #include <sstream>
 
@@ -30,6 +31,10 @@ std::string nodeToString(const cv::FileNode& n) {
 }  // namespace
 
 cv::FileStorage openForRead(const std::string& path, const std::string& what) {
+  // Checked first so that OpenCV does not log its own error before ours.
+  if (!std::ifstream(path).good()) {
+    throw ConfigError(what + " '" + path + "': cannot open (missing or unreadable)");
+  }
   cv::FileStorage fs;
   try {
     if (!fs.open(path, cv::FileStorage::READ)) {
@@ -50,7 +55,8 @@ cv::FileNode readNode(const cv::FileNode& parent, const std::string& field,
 
 double readDouble(const cv::FileNode& parent, const std::string& field, const std::string& where) {
   cv::FileNode n = readNode(parent, field, where);
-  if (!n.isReal() && !n.isInt()) throw ConfigError(where + ": field '" + field + "' must be a number");
+  if (!n.isReal() && !n.isInt())
+    throw ConfigError(where + ": field '" + field + "' must be a number");
   double v = static_cast<double>(n);
   if (!std::isfinite(v)) throw ConfigError(where + ": field '" + field + "' is not finite");
   return v;
@@ -69,8 +75,8 @@ std::string readString(const cv::FileNode& parent, const std::string& field,
   return static_cast<std::string>(n);
 }
 
-std::vector<double> readNumbers(const cv::FileNode& parent, const std::string& field,
-                                size_t count, const std::string& where) {
+std::vector<double> readNumbers(const cv::FileNode& parent, const std::string& field, size_t count,
+                                const std::string& where) {
   cv::FileNode n = readNode(parent, field, where);
   std::vector<double> out;
   if (n.isSeq()) {
@@ -79,11 +85,10 @@ std::vector<double> readNumbers(const cv::FileNode& parent, const std::string& f
       out.push_back(static_cast<double>(item));
     }
   }
-  if (out.size() != count || !std::all_of(out.begin(), out.end(), [](double v) {
-        return std::isfinite(v);
-      })) {
-    throw ConfigError(where + ": field '" + field + "' must be a list of " +
-                      std::to_string(count) + " finite numbers");
+  if (out.size() != count ||
+      !std::all_of(out.begin(), out.end(), [](double v) { return std::isfinite(v); })) {
+    throw ConfigError(where + ": field '" + field + "' must be a list of " + std::to_string(count) +
+                      " finite numbers");
   }
   return out;
 }
@@ -120,8 +125,7 @@ void Params::add(const std::string& name, double v, const std::string& unit,
   order_.push_back(name);
   entries_[name] = {Type::kDouble, formatDouble(v), formatDouble(v), unit, help};
 }
-void Params::add(const std::string& name, int v, const std::string& unit,
-                 const std::string& help) {
+void Params::add(const std::string& name, int v, const std::string& unit, const std::string& help) {
   order_.push_back(name);
   entries_[name] = {Type::kInt, std::to_string(v), std::to_string(v), unit, help};
 }
@@ -158,8 +162,8 @@ void Params::setFrom(const std::string& raw_name, const std::string& value,
     case Type::kDouble: {
       double d = std::strtod(v.c_str(), &end);
       if (v.empty() || *end != '\0' || !std::isfinite(d)) {
-        throw ConfigError(source + ": parameter '" + name + "' must be a finite number, got '" +
-                          v + "'");
+        throw ConfigError(source + ": parameter '" + name + "' must be a finite number, got '" + v +
+                          "'");
       }
       break;
     }
@@ -218,6 +222,10 @@ bool Params::parse(int argc, char** argv) {
       std::fputs(usage().c_str(), stdout);
       return false;
     }
+    if (arg == "--help-markdown") {  // the parameter table of the folder READMEs
+      std::fputs(markdownTable().c_str(), stdout);
+      return false;
+    }
     if (arg.rfind("--", 0) != 0) throw ConfigError("unexpected argument '" + arg + "'");
     arg = arg.substr(2);
     std::string value;
@@ -236,21 +244,29 @@ bool Params::parse(int argc, char** argv) {
         throw ConfigError("flag --" + arg + " needs a value");
       }
     }
-    flags.emplace_back(normalise(arg), value);
+    flags.emplace_back(arg, value);
   }
   for (const auto& [name, value] : flags) {
-    if (name == "config") parseConfigFile(value);
+    if (normalise(name) == "config") parseConfigFile(value);
   }
   for (const auto& [name, value] : flags) {
-    if (name != "config") setFrom(name, value, "flag --" + name);
+    if (normalise(name) != "config") setFrom(name, value, "flag --" + name);
   }
   return true;
 }
 
-double Params::getDouble(const std::string& name) const { return std::stod(entry(name).value); }
-int Params::getInt(const std::string& name) const { return std::stoi(entry(name).value); }
-bool Params::getBool(const std::string& name) const { return entry(name).value == "true"; }
-std::string Params::getString(const std::string& name) const { return entry(name).value; }
+double Params::getDouble(const std::string& name) const {
+  return std::stod(entry(name).value);
+}
+int Params::getInt(const std::string& name) const {
+  return std::stoi(entry(name).value);
+}
+bool Params::getBool(const std::string& name) const {
+  return entry(name).value == "true";
+}
+std::string Params::getString(const std::string& name) const {
+  return entry(name).value;
+}
 
 cv::FileNode Params::section(const std::string& name) const {
   if (!config_.isOpened()) return cv::FileNode();
@@ -281,8 +297,7 @@ std::string Params::markdownTable() const {
   s << "| parameter | unit | default | meaning |\n|---|---|---|---|\n";
   for (const auto& name : order_) {
     const Entry& e = entries_.at(name);
-    s << "| `" << name << "` | " << e.unit << " | " << e.default_value << " | " << e.help
-      << " |\n";
+    s << "| `" << name << "` | " << e.unit << " | " << e.default_value << " | " << e.help << " |\n";
   }
   return s.str();
 }

@@ -49,14 +49,16 @@ void Pt1Axis::advanceTo(double t_s, double max_step_s) {
 }
 
 bool Pt1Axis::atLimit() const {
-  return position_ <= params_.min_position || position_ >= params_.max_position;
+  // A PT1 only approaches a limit it is driven to: count the last 0.01 % of the range.
+  const double margin = 1e-4 * (params_.max_position - params_.min_position);
+  return position_ <= params_.min_position + margin || position_ >= params_.max_position - margin;
 }
 
 namespace {
 std::array<Pt1Axis, 6> makeAxes(const PtzPlant::Params& p, const PtzPose& l, const PtzPose& r) {
-  return {Pt1Axis(p.axis[0], l.pan_rad), Pt1Axis(p.axis[1], l.tilt_rad), Pt1Axis(p.axis[2], l.zoom),
-          Pt1Axis(p.axis[0], r.pan_rad), Pt1Axis(p.axis[1], r.tilt_rad),
-          Pt1Axis(p.axis[2], r.zoom)};
+  return {Pt1Axis(p.axis[0], l.pan_rad),  Pt1Axis(p.axis[1], l.tilt_rad),
+          Pt1Axis(p.axis[2], l.zoom),     Pt1Axis(p.axis[0], r.pan_rad),
+          Pt1Axis(p.axis[1], r.tilt_rad), Pt1Axis(p.axis[2], r.zoom)};
 }
 }  // namespace
 
@@ -96,7 +98,8 @@ PtzPose PtzPlant::rate(Side side) const {
 }
 
 bool PtzPlant::atLimit(Side side) const {
-  return axis(side, kPan).atLimit() || axis(side, kTilt).atLimit() || axis(side, kZoom).atLimit();
+  // Zoom at 1x is its lower limit and the normal wide view: only pan and tilt count.
+  return axis(side, kPan).atLimit() || axis(side, kTilt).atLimit();
 }
 
 PtzPlant::Params defaultPlantParams() {
@@ -126,7 +129,8 @@ void addPlantParams(Params& params) {
     const std::string a = kAxisNames[i];
     const std::string u = kAxisUnits[i];
     params.add(a + "_gain", d.axis[i].gain, "", a + " motor gain K");
-    params.add(a + "_time_constant_s", d.axis[i].time_constant_s, "s", a + " motor time constant T");
+    params.add(a + "_time_constant_s", d.axis[i].time_constant_s, "s",
+               a + " motor time constant T");
     params.add(a + "_min", d.axis[i].min_position, u, a + " lower limit");
     params.add(a + "_max", d.axis[i].max_position, u, a + " upper limit");
     params.add(a + "_max_rate", d.axis[i].max_rate_per_s, u + "/s", a + " rate limit");

@@ -1,5 +1,6 @@
 #include "ptz/rig.hpp"
 
+#include <Eigen/Core>
 #include <opencv2/core/eigen.hpp>
 
 #include <algorithm>
@@ -10,7 +11,9 @@
 
 namespace ptz {
 
-const char* sideName(Side side) { return side == Side::kLeft ? "left" : "right"; }
+const char* sideName(Side side) {
+  return side == Side::kLeft ? "left" : "right";
+}
 
 Eigen::Matrix3d rotationY(double a) {
   return Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()).toRotationMatrix();
@@ -33,8 +36,8 @@ Eigen::Vector3d CameraView::toCamera(const Eigen::Vector3d& p_head) const {
 
 Eigen::Vector2d CameraView::projectCamera(const Eigen::Vector3d& p) const {
   if (!(p.z() > 0)) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  const Eigen::Vector2d xy = distortNormalised({p.x() / p.z(), p.y() / p.z()},
-                                               intrinsics.distortion);
+  const Eigen::Vector2d xy =
+      distortNormalised({p.x() / p.z(), p.y() / p.z()}, intrinsics.distortion);
   return {intrinsics.fx * xy.x() + intrinsics.cx, intrinsics.fy * xy.y() + intrinsics.cy};
 }
 
@@ -100,7 +103,8 @@ Intrinsics readIntrinsics(const cv::FileNode& node, const std::string& where) {
   cv::Mat D = readMatrix(node, "distortion_coefficients", 1, 5, where);
   Intrinsics k{K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2), {}};
   for (int i = 0; i < 5; ++i) k.distortion[i] = D.at<double>(i);
-  if (k.fx <= 0 || k.fy <= 0) throw ConfigError(where + ": field 'camera_matrix' has fx or fy <= 0");
+  if (k.fx <= 0 || k.fy <= 0)
+    throw ConfigError(where + ": field 'camera_matrix' has fx or fy <= 0");
   return k;
 }
 
@@ -133,13 +137,15 @@ CameraSpec readCamera(const cv::FileNode& root, const std::string& side, int wid
 
 void writeCamera(cv::FileStorage& fs, const CameraSpec& spec) {
   fs << "{";
-  fs << "zoom_table" << "[";
+  fs << "zoom_table"
+     << "[";
   for (const auto& e : spec.zoom_table) {
     const Intrinsics& k = e.intrinsics;
     cv::Mat K = (cv::Mat_<double>(3, 3) << k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
     cv::Mat D(1, 5, CV_64F);
     for (int i = 0; i < 5; ++i) D.at<double>(i) = k.distortion[i];
-    fs << "{" << "zoom" << e.zoom << "camera_matrix" << K << "distortion_coefficients" << D << "}";
+    fs << "{"
+       << "zoom" << e.zoom << "camera_matrix" << K << "distortion_coefficients" << D << "}";
   }
   fs << "]";
   const auto& o = spec.optical_centre_from_pivot_m;

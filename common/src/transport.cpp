@@ -150,7 +150,9 @@ bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* err
 
 namespace {
 std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+void onSignal(int) {
+  g_stop = true;
+}
 }  // namespace
 
 void StopFlag::install() {
@@ -160,8 +162,12 @@ void StopFlag::install() {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
 }
-bool StopFlag::stopRequested() { return g_stop.load(); }
-void StopFlag::request() { g_stop = true; }
+bool StopFlag::stopRequested() {
+  return g_stop.load();
+}
+void StopFlag::request() {
+  g_stop = true;
+}
 
 StatusReporter::StatusReporter(lcm::LCM* lcm, const Params& params, const std::string& process)
     : lcm_(lcm),
@@ -200,7 +206,9 @@ void StatusReporter::countDropped(const std::string& ch, const std::string& reas
   increment("dropped_" + reason);
 }
 
-void StatusReporter::increment(const std::string& name, int64_t by) { counters_[name] += by; }
+void StatusReporter::increment(const std::string& name, int64_t by) {
+  counters_[name] += by;
+}
 void StatusReporter::setCounter(const std::string& name, int64_t value) {
   counters_[name] = value;
 }

@@ -33,8 +33,9 @@ void declare(Params& p) {
   p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time");
   p.add("max_setpoint_age_ms", 500.0, "ms", "realtime: drop setpoints published longer ago");
   p.addSection("scene", "backdrop_distance_m, floor_height_m, texture_m_per_texel, texture_seed");
-  p.addSection("objects", "list of {name, class, shape: sphere|box, radius_m | half_extents_m, "
-                          "color_bgr, trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
+  p.addSection("objects",
+               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, "
+               "color_bgr, trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
   p.addSection("chessboard", "{inner_cols, inner_rows, square_m, centre_m, rotation_vector}");
 }
 
@@ -48,14 +49,15 @@ class SimNode {
         frame_period_s_(1.0 / p.getDouble("frame_rate_hz")),
         state_period_s_(1.0 / p.getDouble("state_rate_hz")),
         encoding_(p.getString("encoding") == "jpeg" ? ptzstereo::image_t::ENCODING_JPEG
-                                                     : ptzstereo::image_t::ENCODING_RAW),
+                                                    : ptzstereo::image_t::ENCODING_RAW),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_truth_(channel(p, channels::kSimTruth)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
-    const std::string where = p.configPath().empty() ? "flags" : "config file '" + p.configPath() + "'";
-    Scene scene = Scene::fromConfig(p.section("scene"), p.section("objects"),
-                                    p.section("chessboard"), where);
+    const std::string where =
+        p.configPath().empty() ? "flags" : "config file '" + p.configPath() + "'";
+    Scene scene =
+        Scene::fromConfig(p.section("scene"), p.section("objects"), p.section("chessboard"), where);
     StereoRig rig = p.getString("rig_file").empty() ? StereoRig::makeDefault()
                                                     : StereoRig::load(p.getString("rig_file"));
     sim_ = std::make_unique<Simulator>(std::move(rig), std::move(scene), plantParamsFrom(p),
@@ -156,9 +158,9 @@ class SimNode {
   void awaitAnswer(int64_t seq) {
     awaiting_seq_ = seq;
     answered_ = false;
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::microseconds(
-                              static_cast<int64_t>(p_.getDouble("lockstep_timeout_ms") * 1000));
+    const auto deadline =
+        std::chrono::steady_clock::now() +
+        std::chrono::microseconds(static_cast<int64_t>(p_.getDouble("lockstep_timeout_ms") * 1000));
     while (!answered_ && !StopFlag::stopRequested()) {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
                             deadline - std::chrono::steady_clock::now())
@@ -231,9 +233,10 @@ class SimNode {
 
 int main(int argc, char** argv) {
   using namespace ptz;
-  Params params("ptz-sim", "Simulated PTZ stereo rig: renders STEREO_FRAME, models the motors "
-                           "(PT1 + dead time), publishes PTZ_STATE and SIM_TRUTH, applies "
-                           "PTZ_SETPOINT.");
+  Params params("ptz-sim",
+                "Simulated PTZ stereo rig: renders STEREO_FRAME, models the motors "
+                "(PT1 + dead time), publishes PTZ_STATE and SIM_TRUTH, applies "
+                "PTZ_SETPOINT.");
   sim::declare(params);
   try {
     if (!params.parse(argc, argv)) return 0;
@@ -252,8 +255,10 @@ int main(int argc, char** argv) {
     warnIfReceiveBufferSmall(url);
     lcm::LCM lcm(url);
     if (!lcm.good()) {
-      std::fprintf(stderr, "ptz-sim: cannot open LCM at '%s' (multicast route? see "
-                           "scripts/check-network)\n", url.c_str());
+      std::fprintf(stderr,
+                   "ptz-sim: cannot open LCM at '%s' (multicast route? see "
+                   "scripts/check-network)\n",
+                   url.c_str());
       return 1;
     }
     StopFlag::install();

@@ -36,30 +36,10 @@ cv::Mat makeTexture(unsigned seed, cv::Vec3f tint) {
   for (int r = 0; r < kTextureSize; ++r) {
     for (int c = 0; c < kTextureSize; ++c) {
       const float v = acc.at<float>(r, c);
-      out.at<cv::Vec3b>(r, c) = cv::Vec3b(cv::saturate_cast<uchar>(v * tint[0]),
-                                          cv::saturate_cast<uchar>(v * tint[1]),
-                                          cv::saturate_cast<uchar>(v * tint[2]));
+      out.at<cv::Vec3b>(r, c) =
+          cv::Vec3b(cv::saturate_cast<uchar>(v * tint[0]), cv::saturate_cast<uchar>(v * tint[1]),
+                    cv::saturate_cast<uchar>(v * tint[2]));
     }
-  }
-  return out;
-}
-
-inline cv::Vec3b sampleTexture(const cv::Mat& tex, float u, float v) {
-  const int iu = static_cast<int>(std::floor(u));
-  const int iv = static_cast<int>(std::floor(v));
-  const float fu = u - iu, fv = v - iv;
-  const int m = kTextureSize - 1;
-  const cv::Vec3b* r0 = tex.ptr<cv::Vec3b>(iv & m);
-  const cv::Vec3b* r1 = tex.ptr<cv::Vec3b>((iv + 1) & m);
-  const cv::Vec3b& a = r0[iu & m];
-  const cv::Vec3b& b = r0[(iu + 1) & m];
-  const cv::Vec3b& c = r1[iu & m];
-  const cv::Vec3b& d = r1[(iu + 1) & m];
-  cv::Vec3b out;
-  for (int k = 0; k < 3; ++k) {
-    const float top = a[k] + fu * (b[k] - a[k]);
-    const float bottom = c[k] + fu * (d[k] - c[k]);
-    out[k] = static_cast<uchar>(top + fv * (bottom - top) + 0.5f);
   }
   return out;
 }
@@ -110,10 +90,16 @@ cv::Rect boundingRect(const CameraView& view, const Eigen::Vector3d& p, double r
 
 }  // namespace
 
-Renderer::Renderer(const Scene& scene)
-    : scene_(scene),
-      backdrop_texture_(makeTexture(scene.texture_seed, {0.95f, 1.0f, 1.05f})),
-      floor_texture_(makeTexture(scene.texture_seed + 1, {0.85f, 0.95f, 1.05f})) {}
+Renderer::Renderer(const Scene& scene) : scene_(scene) {
+  // Atlas: backdrop above, floor below, each with one wrapped row and column so that bilinear
+  // sampling at the last texel reads the first.
+  cv::Mat backdrop, floor;
+  cv::copyMakeBorder(makeTexture(scene.texture_seed, {0.95f, 1.0f, 1.05f}), backdrop, 0, 1, 0, 1,
+                     cv::BORDER_WRAP);
+  cv::copyMakeBorder(makeTexture(scene.texture_seed + 1, {0.85f, 0.95f, 1.05f}), floor, 0, 1, 0, 1,
+                     cv::BORDER_WRAP);
+  cv::vconcat(backdrop, floor, atlas_);
+}
 
 const cv::Mat& Renderer::rays(const CameraView& view) {
   for (auto& c : caches_) {
@@ -132,7 +118,8 @@ const cv::Mat& Renderer::rays(const CameraView& view) {
   const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
   std::vector<cv::Point2f> undistorted;
   cv::undistortPoints(grid, undistorted, K, cv::Mat(k.distortion, true), cv::noArray(),
-                      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
+                      cv::noArray(),
+                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
   RayCache cache{view.width, view.height, k, cv::Mat(view.height, view.width, CV_32FC2)};
   for (int v = 0; v < view.height; ++v) {
     const int j = v / kGridStep;
@@ -157,44 +144,60 @@ const cv::Mat& Renderer::rays(const CameraView& view) {
 
 void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr) {
   const cv::Mat& ray_map = rays(view);
-  bgr->create(view.height, view.width, CV_8UC3);
-  cv::Mat depth(view.height, view.width, CV_32F);
+  // Background: per pixel, where its ray meets the floor or the backdrop, as fixed-point
+  // coordinates into the texture atlas (OpenCV's remap format: integer texel plus a 1/32 texel
+  // fraction); cv::remap then samples it bilinearly, vectorised.
+  map_xy_.create(view.height, view.width, CV_16SC2);
+  map_frac_.create(view.height, view.width, CV_16UC1);
+  depth_.create(view.height, view.width, CV_32F);
   const Eigen::Matrix3f R = view.rotation_head_camera.cast<float>();
   const Eigen::Vector3f C = view.position_head_m.cast<float>();
   const float zb = static_cast<float>(scene_.backdrop_distance_m);
   const float yf = static_cast<float>(scene_.floor_height_m);
-  const float inv_texel = static_cast<float>(1.0 / scene_.texture_m_per_texel);
-  const cv::Vec3b sky(200, 190, 180);
+  constexpr int kSub = cv::INTER_TAB_SIZE;  // 32 steps per texel
+  const double scale = kSub / scene_.texture_m_per_texel;
+  constexpr int kWrapMask = kTextureSize * kSub - 1;
+  // A large multiple of the texture size keeps coordinates positive before the cast truncates,
+  // so truncation is floor and the mask wraps.
+  constexpr double kOffset = 4096.0 * kTextureSize * kSub + 0.5;
+  auto fixed = [&](float metres) {
+    return static_cast<int64_t>(metres * scale + kOffset) & kWrapMask;
+  };
+  const short floor_row = kTextureSize + 1;  // the floor's half of the atlas
   for (int v = 0; v < view.height; ++v) {
     const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
-    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
-    float* out_depth = depth.ptr<float>(v);
+    cv::Vec2s* xy_row = map_xy_.ptr<cv::Vec2s>(v);
+    uint16_t* frac_row = map_frac_.ptr<uint16_t>(v);
+    float* depth_row = depth_.ptr<float>(v);
     for (int u = 0; u < view.width; ++u) {
       const Eigen::Vector3f d = R * Eigen::Vector3f(ray_row[u][0], ray_row[u][1], 1.0f);
-      float t = std::numeric_limits<float>::infinity();
-      cv::Vec3b colour = sky;
-      if (d.y() > 0) {
-        const float tf = (yf - C.y()) / d.y();
-        const float z = C.z() + tf * d.z();
-        if (tf > 0 && z < zb) {
-          t = tf;
-          colour = sampleTexture(floor_texture_, (C.x() + tf * d.x()) * inv_texel, z * inv_texel);
-        }
+      const float tf = (yf - C.y()) / d.y();
+      const float tb = (zb - C.z()) / d.z();
+      int64_t fx = 0, fy = 0;
+      short row0 = 0;
+      if (d.y() > 0 && tf > 0 && C.z() + tf * d.z() < zb) {
+        fx = fixed(C.x() + tf * d.x());
+        fy = fixed(C.z() + tf * d.z());
+        row0 = floor_row;
+        depth_row[u] = tf;
+      } else if (d.z() > 0 && tb > 0) {
+        fx = fixed(C.x() + tb * d.x());
+        fy = fixed(C.y() + tb * d.y());
+        depth_row[u] = tb;
+      } else {
+        xy_row[u] = cv::Vec2s(-100, -100);  // outside the atlas: the sky colour
+        frac_row[u] = 0;
+        depth_row[u] = std::numeric_limits<float>::infinity();
+        continue;
       }
-      if (!std::isfinite(t) && d.z() > 0) {
-        const float tb = (zb - C.z()) / d.z();
-        if (tb > 0) {
-          t = tb;
-          colour = sampleTexture(backdrop_texture_, (C.x() + tb * d.x()) * inv_texel,
-                                 (C.y() + tb * d.y()) * inv_texel);
-        }
-      }
-      out[u] = colour;
-      out_depth[u] = t;
+      xy_row[u] = cv::Vec2s(static_cast<short>(fx / kSub), static_cast<short>(row0 + fy / kSub));
+      frac_row[u] = static_cast<uint16_t>((fy % kSub) * kSub + (fx % kSub));
     }
   }
-  if (scene_.chessboard.present) drawChessboard(view, ray_map, bgr, &depth);
-  for (const auto& object : scene_.objects) drawObject(object, t_s, view, ray_map, bgr, &depth);
+  cv::remap(atlas_, *bgr, map_xy_, map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+            cv::Scalar(200, 190, 180));
+  if (scene_.chessboard.present) drawChessboard(view, ray_map, bgr, &depth_);
+  for (const auto& object : scene_.objects) drawObject(object, t_s, view, ray_map, bgr, &depth_);
 }
 
 void Renderer::drawObject(const SceneObject& object, double t_s, const CameraView& view,
@@ -312,16 +315,23 @@ NoiseBank::NoiseBank(int width, int height, double sigma, unsigned seed)
     : sigma_(sigma), seed_(seed) {
   if (sigma <= 0) return;
   cv::RNG rng(seed);
-  bank_.create(height + 64, width + 64, CV_16SC3);
-  rng.fill(bank_, cv::RNG::NORMAL, 0.0, sigma);
+  cv::Mat noise(height + 64, width + 64, CV_32FC3);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
+  // Positive and negative parts as 8-bit images: two saturating 8-bit passes per frame.
+  cv::Mat positive, negative;
+  cv::max(noise, 0.0, positive);
+  cv::max(-noise, 0.0, negative);
+  positive.convertTo(positive_, CV_8U);
+  negative.convertTo(negative_, CV_8U);
 }
 
 void NoiseBank::apply(uint64_t frame_index, int camera, cv::Mat* bgr) const {
-  if (bank_.empty()) return;
+  if (positive_.empty()) return;
   cv::RNG rng(seed_ ^ (frame_index * 2654435761ULL) ^ (static_cast<uint64_t>(camera) << 40));
   const int dx = rng.uniform(0, 64), dy = rng.uniform(0, 64);
-  const cv::Mat slice = bank_(cv::Rect(dx, dy, bgr->cols, bgr->rows));
-  cv::add(*bgr, slice, *bgr, cv::noArray(), CV_8U);
+  const cv::Rect slice(dx, dy, bgr->cols, bgr->rows);
+  cv::add(*bgr, positive_(slice), *bgr);
+  cv::subtract(*bgr, negative_(slice), *bgr);
 }
 
 }  // namespace ptz::sim

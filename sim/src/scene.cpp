@@ -13,8 +13,10 @@ Trajectory::Type Trajectory::parseType(const std::string& name, const std::strin
   if (name == "circle") return Type::kCircle;
   if (name == "figure_eight") return Type::kFigureEight;
   if (name == "random_walk") return Type::kRandomWalk;
-  throw ConfigError(where + ": field 'trajectory' must be one of static, line, circle, "
-                            "figure_eight, random_walk (got '" + name + "')");
+  throw ConfigError(where +
+                    ": field 'trajectory' must be one of static, line, circle, "
+                    "figure_eight, random_walk (got '" +
+                    name + "')");
 }
 
 Eigen::Vector3d Trajectory::position(double t) const {
@@ -30,7 +32,8 @@ Eigen::Vector3d Trajectory::position(double t) const {
       return centre_m + s * A;
     }
     case Type::kCircle:
-      return centre_m + Eigen::Vector3d(A.x() * std::cos(a), A.y() * std::sin(a), A.z() * std::sin(a));
+      return centre_m +
+             Eigen::Vector3d(A.x() * std::cos(a), A.y() * std::sin(a), A.z() * std::sin(a));
     case Type::kFigureEight:
       return centre_m +
              Eigen::Vector3d(A.x() * std::sin(a), A.y() * std::sin(2 * a), A.z() * std::sin(2 * a));
@@ -132,7 +135,8 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
         o.color_bgr[k] = static_cast<uchar>(bgr[k]);
       }
       Trajectory& t = o.trajectory;
-      t.type = Trajectory::parseType(n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
+      t.type = Trajectory::parseType(
+          n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
       t.centre_m = vec3(n, "centre_m", w, t.centre_m);
       t.amplitude_m = vec3(n, "amplitude_m", w, t.amplitude_m);
       t.period_s = optDouble(n, "period_s", w, t.period_s);

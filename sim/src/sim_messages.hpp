@@ -11,7 +11,6 @@ namespace ptz::sim {
 ptzstereo::ptz_state_t makeStateMessage(const PtzPlant& plant, int64_t utime);
 ptzstereo::stereo_frame_t makeFrameMessage(const SimFrame& frame, int64_t utime, int8_t encoding,
                                            int jpeg_quality);
-ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& frame,
-                                        int64_t utime);
+ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& frame, int64_t utime);
 
 }  // namespace ptz::sim

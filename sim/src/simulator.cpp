@@ -2,8 +2,8 @@
 
 namespace ptz::sim {
 
-Simulator::Simulator(StereoRig rig, Scene scene, const PtzPlant::Params& plant,
-                     double noise_sigma, unsigned seed)
+Simulator::Simulator(StereoRig rig, Scene scene, const PtzPlant::Params& plant, double noise_sigma,
+                     unsigned seed)
     : rig_(std::move(rig)),
       scene_(std::make_unique<Scene>(std::move(scene))),
       plant_(plant, PtzPose{}, PtzPose{}),

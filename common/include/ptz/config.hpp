@@ -31,8 +31,8 @@ cv::FileNode readNode(const cv::FileNode& parent, const std::string& field,
 // A matrix stored as !!opencv-matrix or as a flat sequence of numbers, checked for its size.
 cv::Mat readMatrix(const cv::FileNode& parent, const std::string& field, int rows, int cols,
                    const std::string& where);
-std::vector<double> readNumbers(const cv::FileNode& parent, const std::string& field,
-                                size_t count, const std::string& where);
+std::vector<double> readNumbers(const cv::FileNode& parent, const std::string& field, size_t count,
+                                const std::string& where);
 
 // The parameters of one process: declared with default, unit and help; read from --config
 // FILE, then from flags (--name VALUE or --name=VALUE, dashes or underscores alike).

@@ -11,7 +11,7 @@
 namespace ptz {
 
 struct AxisParams {
-  double gain = 1.0;             // K: steady-state position per unit of setpoint
+  double gain = 1.0;              // K: steady-state position per unit of setpoint
   double time_constant_s = 0.24;  // T (the paper's motor)
   double dead_time_s = 0.0;       // tau
   double min_position = -1.0;
@@ -64,12 +64,12 @@ class PtzPlant {
 
   // Applies a whole setpoint (both heads) issued at t_s. Returns the number of values that
   // were clamped (*clamped) or rejected (*rejected); a rejected value leaves its axis alone.
-  void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped,
-               int* rejected);
+  void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped, int* rejected);
   void advanceTo(double t_s);
 
   PtzPose pose(Side side) const;
   PtzPose rate(Side side) const;
+  // Pan or tilt at a position limit.
   bool atLimit(Side side) const;
   const Pt1Axis& axis(Side side, Axis a) const { return axes_[index(side, a)]; }
   double time() const { return axes_[0].time(); }

@@ -27,13 +27,13 @@ class Renderer {
     Intrinsics intrinsics;
     cv::Mat rays;
   };
-  void drawObject(const SceneObject& object, double t_s, const CameraView& view, const cv::Mat& rays,
-                  cv::Mat* bgr, cv::Mat* depth);
+  void drawObject(const SceneObject& object, double t_s, const CameraView& view,
+                  const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
   void drawChessboard(const CameraView& view, const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
 
   const Scene& scene_;
-  cv::Mat backdrop_texture_;
-  cv::Mat floor_texture_;
+  cv::Mat atlas_;                      // backdrop and floor textures, BGR8
+  cv::Mat map_xy_, map_frac_, depth_;  // per-frame scratch, kept to avoid reallocation
   std::vector<RayCache> caches_;
 };
 
@@ -48,7 +48,7 @@ class NoiseBank {
  private:
   double sigma_;
   unsigned seed_;
-  cv::Mat bank_;  // CV_16SC3, larger than one image
+  cv::Mat positive_, negative_;  // CV_8UC3 parts of one noise field, larger than an image
 };
 
 }  // namespace ptz::sim

@@ -28,8 +28,7 @@ class Simulator {
   // Renders both cameras at the current sim time and the current motor state.
   SimFrame capture();
   // A setpoint issued at sim time t_s (takes effect after the dead time).
-  void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped,
-               int* rejected);
+  void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped, int* rejected);
   void advanceTo(double t_s) { plant_.advanceTo(t_s); }
   double time() const { return plant_.time(); }
 

@@ -1,0 +1,58 @@
+// Decodes every message of a log written by write_all_types with the project's types jar, the
+// way lcm-spy does: the class is found by the message's fingerprint, not by its channel.
+import java.io.ByteArrayInputStream;
+import java.io.DataInputStream;
+import java.io.IOException;
+import java.util.HashMap;
+import java.util.Map;
+
+import lcm.logging.Log;
+import lcm.spy.LCMTypeDatabase;
+
+public class DecodeAll {
+  public static void main(String[] args) throws Exception {
+    LCMTypeDatabase db = new LCMTypeDatabase();
+    Log log = new Log(args[0], "r");
+    Map<String, Object> decoded = new HashMap<>();
+    int passed = 0, failed = 0;
+    while (true) {
+      Log.Event ev;
+      try {
+        ev = log.readNext();
+      } catch (IOException eof) {
+        break;
+      }
+      DataInputStream in = new DataInputStream(new ByteArrayInputStream(ev.data));
+      long fingerprint = in.readLong();
+      Class<?> cls = db.getClassByFingerprint(fingerprint);
+      String expected = "ptzstereo." + ev.channel;
+      if (cls == null || !cls.getName().equals(expected)) {
+        System.out.println("FAIL " + ev.channel + ": no class for its fingerprint in the jar");
+        failed++;
+        continue;
+      }
+      Object msg = cls.getConstructor(byte[].class).newInstance(ev.data);
+      decoded.put(ev.channel, msg);
+      System.out.println("ok   " + ev.channel + " -> " + cls.getName());
+      passed++;
+    }
+    // A few known values, decoded in Java.
+    failed += check(((ptzstereo.stereo_frame_t) decoded.get("stereo_frame_t")).seq == 42, "seq");
+    failed += check(((ptzstereo.image_t) decoded.get("image_t")).data[5] == 6, "image data");
+    failed += check(((ptzstereo.process_status_t) decoded.get("process_status_t")).counters[0].value
+        == 300, "status counter");
+    failed += check(((ptzstereo.object_pose_t) decoded.get("object_pose_t")).objects[0].position_m[2]
+        == 3.0, "pose z");
+    if (decoded.size() != Integer.parseInt(args[1])) {
+      System.out.println("FAIL expected " + args[1] + " types, decoded " + decoded.size());
+      failed++;
+    }
+    System.out.println(passed + " passed, " + failed + " failed");
+    System.exit(failed == 0 ? 0 : 1);
+  }
+
+  static int check(boolean ok, String what) {
+    if (!ok) System.out.println("FAIL value check: " + what);
+    return ok ? 0 : 1;
+  }
+}
