@@ -1,5 +1,6 @@
 // ptz-log-summary: what an LCM log holds, per channel (messages, rate, size), the stereo frames'
-// sequence gaps, and the last PROCESS_STATUS counters of every process. Text, or JSON.
+// sequence gaps, each process's last status counters, and the closed-loop numbers of the run
+// (tools/run_metrics.hpp). Text on stdout; --json writes the run's summary.json.
 #include <lcm/lcm-cpp.hpp>
 
 #include <cstdio>
@@ -7,8 +8,7 @@
 #include <string>
 
 #include "ptz/config.hpp"
-#include "ptzstereo/process_status_t.hpp"
-#include "ptzstereo/stereo_frame_t.hpp"
+#include "tools/run_metrics.hpp"
 
 namespace {
 
@@ -19,24 +19,24 @@ struct ChannelStats {
   int64_t last_utime = 0;
 };
 
-std::string jsonEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
+template <typename T>
+bool decode(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
+  if (msg->decode(ev.data, 0, ev.datalen) >= 0) return true;
+  ++*undecodable;
+  return false;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  ptz::Params p("ptz-log-summary",
-                "Summarises an LCM log: messages, rates and sizes per channel, "
-                "stereo frame gaps, and each process's last status counters.");
+  ptz::Params p("ptz-log-summary", "Summarises an LCM log: messages, rates and sizes per channel, "
+                                   "stereo frame gaps, each process's last status counters and "
+                                   "the closed-loop numbers of the run.");
   p.add("log", "", "the LCM log file (required)");
-  p.add("json", "", "also write the summary as JSON to this file");
+  p.add("json", "", "also write the run's summary as JSON to this file");
   p.add("channel_prefix", "", "prefix of the project's channel names");
+  p.add("target_class", "red_ball", "class of the tracked object (for centring and 3D error)");
+  p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame");
   try {
     if (!p.parse(argc, argv)) return 0;
   } catch (const ptz::ConfigError& e) {
@@ -54,33 +54,37 @@ int main(int argc, char** argv) {
     return 1;
   }
   const std::string prefix = p.getString("channel_prefix");
-  const std::string frame_channel = prefix + "STEREO_FRAME";
-  const std::string status_prefix = prefix + "PROCESS_STATUS_";
+  ptz::tools::RunMetrics metrics(p.getString("target_class"), p.getDouble("settle_s"));
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ptzstereo::process_status_t> last_status;
-  int64_t frames = 0, frame_gaps = 0, last_seq = -1, undecodable = 0;
+  int64_t frame_gaps = 0, last_seq = -1, undecodable = 0;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     ChannelStats& c = channels[ev->channel];
     if (c.messages == 0) c.first_utime = ev->timestamp;
     c.last_utime = ev->timestamp;
     ++c.messages;
     c.bytes += ev->datalen;
-    if (ev->channel == frame_channel) {
+    const std::string& ch = ev->channel;
+    if (ch == prefix + "STEREO_FRAME") {
       ptzstereo::stereo_frame_t f;
-      if (f.decode(ev->data, 0, ev->datalen) < 0) {
-        ++undecodable;
-        continue;
-      }
-      ++frames;
+      if (!decode(*ev, &f, &undecodable)) continue;
       if (last_seq >= 0 && f.seq > last_seq + 1) frame_gaps += f.seq - last_seq - 1;
       last_seq = f.seq;
-    } else if (ev->channel.rfind(status_prefix, 0) == 0) {
+      metrics.onFrame(f);
+    } else if (ch == prefix + "SIM_TRUTH") {
+      ptzstereo::sim_truth_t t;
+      if (decode(*ev, &t, &undecodable)) metrics.onTruth(t);
+    } else if (ch == prefix + "OBJECT_POSE") {
+      ptzstereo::object_pose_t m;
+      if (decode(*ev, &m, &undecodable)) metrics.onPose(m);
+    } else if (ch == prefix + "PTZ_SETPOINT") {
+      ptzstereo::ptz_setpoint_t m;
+      if (decode(*ev, &m, &undecodable)) metrics.onSetpoint(m);
+    } else if (ch.rfind(prefix + "PROCESS_STATUS_", 0) == 0) {
       ptzstereo::process_status_t s;
-      if (s.decode(ev->data, 0, ev->datalen) < 0) {
-        ++undecodable;
-        continue;
-      }
+      if (!decode(*ev, &s, &undecodable)) continue;
       last_status[s.process] = s;
+      metrics.onStatus(s);
     }
   }
   std::printf("log %s\n", path.c_str());
@@ -91,8 +95,8 @@ int main(int argc, char** argv) {
     std::printf("%-32s %10lld %10.1f %12.2f\n", name.c_str(), static_cast<long long>(c.messages),
                 rate, c.bytes / 1e6);
   }
-  std::printf("stereo frames: %lld logged, %lld missing by sequence number\n",
-              static_cast<long long>(frames), static_cast<long long>(frame_gaps));
+  std::printf("stereo frames missing from the log by sequence number: %lld\n",
+              static_cast<long long>(frame_gaps));
   if (undecodable) std::printf("undecodable messages: %lld\n", static_cast<long long>(undecodable));
   for (const auto& [process, s] : last_status) {
     std::printf("%s (last status, uptime %.1f s)%s%s\n", process.c_str(), s.uptime_s,
@@ -101,6 +105,8 @@ int main(int argc, char** argv) {
       std::printf("  %-36s %lld\n", counter.name.c_str(), static_cast<long long>(counter.value));
     }
   }
+  const ptz::tools::RunSummary summary = metrics.summary();
+  std::printf("run summary:\n%s", summary.toJson().c_str());
   const std::string json = p.getString("json");
   if (!json.empty()) {
     FILE* f = std::fopen(json.c_str(), "w");
@@ -108,28 +114,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "ptz-log-summary: cannot write '%s'\n", json.c_str());
       return 1;
     }
-    std::fprintf(f,
-                 "{\n  \"log\": \"%s\",\n  \"frames_logged\": %lld,\n  \"frames_missing\": %lld,\n",
-                 jsonEscape(path).c_str(), static_cast<long long>(frames),
-                 static_cast<long long>(frame_gaps));
-    std::fprintf(f, "  \"channels\": {");
-    bool first = true;
-    for (const auto& [name, c] : channels) {
-      std::fprintf(f, "%s\n    \"%s\": {\"messages\": %lld, \"bytes\": %lld}", first ? "" : ",",
-                   jsonEscape(name).c_str(), static_cast<long long>(c.messages),
-                   static_cast<long long>(c.bytes));
-      first = false;
-    }
-    std::fprintf(f, "\n  },\n  \"counters\": {");
-    first = true;
-    for (const auto& [process, s] : last_status) {
-      for (const auto& counter : s.counters) {
-        std::fprintf(f, "%s\n    \"%s.%s\": %lld", first ? "" : ",", jsonEscape(process).c_str(),
-                     jsonEscape(counter.name).c_str(), static_cast<long long>(counter.value));
-        first = false;
-      }
-    }
-    std::fprintf(f, "\n  }\n}\n");
+    std::fputs(summary.toJson().c_str(), f);
     std::fclose(f);
   }
   return 0;

@@ -1,0 +1,86 @@
+// The pan/tilt/zoom controller of both heads (no LCM). One update per OBJECT_POSE.
+//
+// Error (paper, eq. 8): e = p_object - p_ref with p_ref on the optical axes through the image
+// centres at the reference apparent size. For each camera, aimAt() turns the 3D position into
+// the pan/tilt angles theta* that put the object at that camera's image centre (vergence
+// follows), and the zoom law turns the range into the zoom that gives it `target_radius_px`.
+//
+// Modes:
+// - "track" (default): u = theta*(t) + omega_hat * lead_s per axis. theta* comes from the 3D
+//   position in the head frame, which does not depend on where the cameras point, so with a
+//   calibrated rig the loop through the image is open: no steady-state error for a still
+//   target, and the feed-forward omega_hat * lead_s (omega_hat: the filtered rate of theta*)
+//   cancels the lag of the motor (T) and of the delay for a target moving at constant angular
+//   rate. Each axis is then  theta = e^(-s tau) / (1 + T s) * (1 + lead_s s / (1 + Tv s)) theta*.
+// - "paper": exactly the paper's loop, a P element on the angular error measured in the image
+//   at capture: u = paper_gain * (theta* - theta_capture). With the PT1 axis this is the open
+//   loop 1.7 / (1 + 0.24 s) e^(-s tau) with unity feedback (steady-state error 1 / (1 + 1.7)).
+//
+// Both: setpoints slew at most max_setpoint_rate and stay within the limits; without a target
+// for lost_hold_s the last setpoint holds, then the heads return home at home_rate; a target
+// found again is resumed from the current setpoint (slewed, no jump).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <optional>
+#include <string>
+
+#include "ptz/plant.hpp"
+#include "ptz/rig.hpp"
+
+namespace ptz::control {
+
+struct ControllerParams {
+  std::string mode = "track";  // "track" or "paper"
+  double paper_gain = 1.7;
+  std::string zoom_mode = "size";  // "size" (keep target_radius_px) or "hold"
+  double target_radius_px = 30.0;
+  double max_zoom = 4.0;
+  double lead_s = 0.3;              // feed-forward horizon (track)
+  double rate_filter_s = 0.25;      // time constant Tv of the rate estimate (track)
+  double max_setpoint_rate = 3.0;   // rad/s for pan and tilt; zoom ratio/s for zoom
+  double lost_hold_s = 0.5;
+  double home_rate = 0.3;           // rad/s (pan, tilt) and ratio/s (zoom) when returning home
+  double min_range_m = 0.3;
+  double max_range_m = 50.0;
+  PtzPlant::Params limits = defaultPlantParams();
+};
+
+// What ptz-detect measured in one frame.
+struct Observation {
+  Eigen::Vector3d position_head_m;
+  double radius_m = 0;  // <= 0: unknown (zoom holds)
+};
+
+class Controller {
+ public:
+  Controller(StereoRig rig, ControllerParams params);
+
+  // One step at time t_s (the frame's capture time) with the frame's PTZ at capture and the
+  // target if seen. Returns the setpoint of both heads.
+  std::array<PtzPose, 2> update(double t_s, const std::optional<Observation>& target,
+                                const PtzPose& left_at_capture, const PtzPose& right_at_capture);
+
+  // Whether an observation is usable (finite, in front, within range); counted by callers.
+  bool plausible(const Observation& o) const;
+  const std::array<PtzPose, 2>& setpoint() const { return setpoint_; }
+  bool tracking() const { return tracking_; }
+
+ private:
+  PtzPose desired(Side side, const Observation& o, const PtzPose& at_capture, double dt);
+  void slewTowards(const std::array<PtzPose, 2>& goal, double dt, double rate_angle,
+                   double rate_zoom);
+
+  StereoRig rig_;
+  ControllerParams p_;
+  std::array<PtzPose, 2> setpoint_{};
+  std::array<PtzPose, 2> last_desired_{};
+  std::array<Eigen::Vector2d, 2> rate_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  std::optional<double> last_t_s_;
+  std::optional<double> last_seen_t_s_;
+  bool tracking_ = false;
+};
+
+}  // namespace ptz::control

@@ -1,0 +1,161 @@
+// ptz-control: OBJECT_POSE (+ PTZ_STATE) -> PTZ_SETPOINT, one setpoint per pose message, each
+// carrying the utime and seq of the frame it answers (lockstep and latency use them).
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+#include "control/controller.hpp"
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/ptz_setpoint_t.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+
+namespace ptz::control {
+namespace {
+
+void declare(Params& p) {
+  addTransportParams(p);
+  addPlantParams(p);  // the limits; the motor model itself is the plant's business
+  const ControllerParams d;
+  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  p.add("mode", "track", "track (default: zero steady-state error, feed-forward) or paper");
+  p.add("paper_gain", d.paper_gain, "", "P gain of the paper mode");
+  p.add("zoom_mode", "size", "size (keep target_radius_px) or hold");
+  p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target");
+  p.add("max_zoom", d.max_zoom, "ratio", "highest zoom the controller asks for");
+  p.add("lead_s", d.lead_s, "s", "feed-forward horizon of the track mode");
+  p.add("rate_filter_s", d.rate_filter_s, "s", "time constant of the angular rate estimate");
+  p.add("max_setpoint_rate", d.max_setpoint_rate, "rad/s", "setpoint slew limit (zoom: ratio/s)");
+  p.add("lost_hold_s", d.lost_hold_s, "s", "hold the last setpoint this long without a target");
+  p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)");
+  p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored");
+  p.add("max_range_m", d.max_range_m, "m", "farther targets are implausible and ignored");
+}
+
+ControllerParams controllerParams(const Params& p) {
+  ControllerParams c;
+  c.mode = p.getString("mode");
+  c.paper_gain = p.getDouble("paper_gain");
+  c.zoom_mode = p.getString("zoom_mode");
+  c.target_radius_px = p.getDouble("target_radius_px");
+  c.max_zoom = p.getDouble("max_zoom");
+  c.lead_s = p.getDouble("lead_s");
+  c.rate_filter_s = p.getDouble("rate_filter_s");
+  c.max_setpoint_rate = p.getDouble("max_setpoint_rate");
+  c.lost_hold_s = p.getDouble("lost_hold_s");
+  c.home_rate = p.getDouble("home_rate");
+  c.min_range_m = p.getDouble("min_range_m");
+  c.max_range_m = p.getDouble("max_range_m");
+  c.limits = plantParamsFrom(p);
+  if (c.mode != "track" && c.mode != "paper") {
+    throw ConfigError("parameter 'mode' must be track or paper, got '" + c.mode + "'");
+  }
+  if (c.zoom_mode != "size" && c.zoom_mode != "hold") {
+    throw ConfigError("parameter 'zoom_mode' must be size or hold, got '" + c.zoom_mode + "'");
+  }
+  if (!(c.target_radius_px > 0) || !(c.max_setpoint_rate > 0) || !(c.home_rate > 0) ||
+      c.lead_s < 0 || !(c.rate_filter_s > 0)) {
+    throw ConfigError("target_radius_px, max_setpoint_rate, home_rate, rate_filter_s must be > 0 "
+                      "and lead_s >= 0");
+  }
+  return c;
+}
+
+bool finitePose(const ptzstereo::ptz_head_setpoint_t& h) {
+  return std::isfinite(h.pan_rad) && std::isfinite(h.tilt_rad) && std::isfinite(h.zoom);
+}
+
+class ControlNode {
+ public:
+  ControlNode(const Params& p, lcm::LCM* lcm, StereoRig rig)
+      : lcm_(lcm),
+        status_(lcm, p, "ptz-control"),
+        controller_(std::move(rig), controllerParams(p)),
+        ch_pose_(channel(p, channels::kObjectPose)),
+        ch_state_(channel(p, channels::kPtzState)),
+        ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
+    lcm_->subscribe(ch_pose_, &ControlNode::onPose, this)->setQueueCapacity(1);
+    lcm_->subscribe(ch_state_, &ControlNode::onState, this)->setQueueCapacity(1);
+  }
+
+  int run() {
+    while (!StopFlag::stopRequested()) {
+      lcm_->handleTimeout(100);
+      status_.maybePublish();
+    }
+    status_.publishNow();
+    return 0;
+  }
+
+ private:
+  void onState(const lcm::ReceiveBuffer*, const std::string& ch, const ptzstereo::ptz_state_t*) {
+    status_.countIn(ch, -1);
+  }
+
+  void onPose(const lcm::ReceiveBuffer*, const std::string& ch, const ptzstereo::object_pose_t* m) {
+    status_.countIn(ch, (wallUtime() - m->utime) / 1000.0);
+    if (!finitePose(m->left_ptz) || !finitePose(m->right_ptz)) {
+      status_.countDropped(ch, "nonfinite_ptz");
+      log_.warn("ptz", "ptz-control: pose message with a non-finite camera pose: dropped");
+      return;
+    }
+    std::optional<Observation> target;
+    if (m->target_index >= 0 && m->target_index < m->num_objects &&
+        m->target_index < static_cast<int32_t>(m->objects.size())) {
+      const auto& o = m->objects[static_cast<size_t>(m->target_index)];
+      Observation obs{{o.position_m[0], o.position_m[1], o.position_m[2]}, o.radius_m};
+      if (controller_.plausible(obs)) {
+        target = obs;
+      } else {
+        status_.increment("implausible_poses");
+        log_.warn("implausible", "ptz-control: implausible target pose ignored");
+      }
+    }
+    const PtzPose lc{m->left_ptz.pan_rad, m->left_ptz.tilt_rad, m->left_ptz.zoom};
+    const PtzPose rc{m->right_ptz.pan_rad, m->right_ptz.tilt_rad, m->right_ptz.zoom};
+    const auto sp = controller_.update(m->utime * 1e-6, target, lc, rc);
+    ptzstereo::ptz_setpoint_t out{};
+    out.utime = m->utime;
+    out.frame_seq = m->frame_seq;
+    out.left = {sp[0].pan_rad, sp[0].tilt_rad, sp[0].zoom};
+    out.right = {sp[1].pan_rad, sp[1].tilt_rad, sp[1].zoom};
+    out.publish_utime = wallUtime();
+    lcm_->publish(ch_setpoint_, &out);
+    status_.countOut(ch_setpoint_, (out.publish_utime - m->utime) / 1000.0);
+    status_.increment(controller_.tracking() ? "setpoints_tracking" : "setpoints_without_target");
+  }
+
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  Controller controller_;
+  std::string ch_pose_, ch_state_, ch_setpoint_;
+};
+
+}  // namespace
+}  // namespace ptz::control
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-control", "Steers pan, tilt and zoom of both heads to keep the target of "
+                               "OBJECT_POSE centred in both images at a constant apparent size; "
+                               "publishes PTZ_SETPOINT, one per pose.");
+  control::declare(params);
+  try {
+    if (!params.parse(argc, argv)) return 0;
+    StereoRig rig = params.getString("rig_file").empty() ? StereoRig::makeDefault()
+                                                         : StereoRig::load(params.getString("rig_file"));
+    const std::string url = lcmUrl(params);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) {
+      std::fprintf(stderr, "ptz-control: cannot open LCM at '%s'\n", url.c_str());
+      return 1;
+    }
+    StopFlag::install();
+    control::ControlNode node(params, &lcm, std::move(rig));
+    return node.run();
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "ptz-control: %s\n", e.what());
+    return 2;
+  }
+}

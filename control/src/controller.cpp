@@ -1,0 +1,104 @@
+#include "control/controller.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "control/pointing.hpp"
+
+namespace ptz::control {
+namespace {
+
+double clampAxis(double v, const AxisParams& a) {
+  return std::clamp(v, a.min_position, a.max_position);
+}
+
+double slew(double from, double to, double max_step) {
+  return from + std::clamp(to - from, -max_step, max_step);
+}
+
+}  // namespace
+
+Controller::Controller(StereoRig rig, ControllerParams params)
+    : rig_(std::move(rig)), p_(std::move(params)) {}
+
+bool Controller::plausible(const Observation& o) const {
+  if (!o.position_head_m.allFinite() || !std::isfinite(o.radius_m)) return false;
+  const double range = o.position_head_m.norm();
+  return range >= p_.min_range_m && range <= p_.max_range_m && o.position_head_m.z() > 0;
+}
+
+PtzPose Controller::desired(Side side, const Observation& o, const PtzPose& at_capture,
+                            double dt) {
+  const int i = static_cast<int>(side);
+  const CameraSpec& spec = rig_.camera(side);
+  PtzPose goal = setpoint_[i];
+  // Zoom first: the pan/tilt that centre the object hardly depend on it.
+  if (p_.zoom_mode == "size" && o.radius_m > 0) {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d c;
+    rig_.cameraPose(side, at_capture.pan_rad, at_capture.tilt_rad, &R, &c);
+    const double range = (o.position_head_m - c).norm();
+    const double fx = p_.target_radius_px * range / o.radius_m;
+    goal.zoom = std::min(zoomForFocalLength(spec, fx), p_.max_zoom);
+  }
+  double pan = 0, tilt = 0;
+  if (!aimAt(rig_, side, o.position_head_m, goal.zoom, imageCentre(spec), &pan, &tilt)) {
+    return setpoint_[i];
+  }
+  if (p_.mode == "paper") {
+    goal.pan_rad = p_.paper_gain * (pan - at_capture.pan_rad);
+    goal.tilt_rad = p_.paper_gain * (tilt - at_capture.tilt_rad);
+    return goal;
+  }
+  // Track: the filtered rate of theta* times the lead.
+  const Eigen::Vector2d theta(pan, tilt);
+  if (tracking_ && dt > 0) {
+    const Eigen::Vector2d prev(last_desired_[i].pan_rad, last_desired_[i].tilt_rad);
+    const double a = dt / (p_.rate_filter_s + dt);
+    rate_[i] += a * ((theta - prev) / dt - rate_[i]);
+  } else {
+    rate_[i].setZero();
+  }
+  last_desired_[i] = {pan, tilt, goal.zoom};
+  goal.pan_rad = pan + rate_[i].x() * p_.lead_s;
+  goal.tilt_rad = tilt + rate_[i].y() * p_.lead_s;
+  return goal;
+}
+
+void Controller::slewTowards(const std::array<PtzPose, 2>& goal, double dt, double rate_angle,
+                             double rate_zoom) {
+  for (int i = 0; i < 2; ++i) {
+    PtzPose& s = setpoint_[i];
+    s.pan_rad = clampAxis(slew(s.pan_rad, goal[i].pan_rad, rate_angle * dt), p_.limits.axis[0]);
+    s.tilt_rad = clampAxis(slew(s.tilt_rad, goal[i].tilt_rad, rate_angle * dt), p_.limits.axis[1]);
+    s.zoom = clampAxis(slew(s.zoom, goal[i].zoom, rate_zoom * dt), p_.limits.axis[2]);
+  }
+}
+
+std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observation>& target,
+                                          const PtzPose& left_at_capture,
+                                          const PtzPose& right_at_capture) {
+  if (!last_t_s_) {
+    setpoint_ = {left_at_capture, right_at_capture};  // start where the heads are
+  }
+  const double dt = last_t_s_ ? std::clamp(t_s - *last_t_s_, 0.0, 1.0) : 0.0;
+  last_t_s_ = t_s;
+  if (target && plausible(*target)) {
+    const std::array<PtzPose, 2> goal = {desired(Side::kLeft, *target, left_at_capture, dt),
+                                         desired(Side::kRight, *target, right_at_capture, dt)};
+    tracking_ = true;
+    last_seen_t_s_ = t_s;
+    // The first setpoint after start or a loss slews too; dt = 0 means "this frame": allow one
+    // frame's worth at 30 Hz.
+    const double step_dt = dt > 0 ? dt : 1.0 / 30;
+    slewTowards(goal, step_dt, p_.max_setpoint_rate, p_.max_setpoint_rate);
+    return setpoint_;
+  }
+  tracking_ = false;
+  rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  if (last_seen_t_s_ && t_s - *last_seen_t_s_ < p_.lost_hold_s) return setpoint_;  // hold
+  slewTowards({PtzPose{0, 0, 1}, PtzPose{0, 0, 1}}, dt, p_.home_rate, p_.home_rate);
+  return setpoint_;
+}
+
+}  // namespace ptz::control

@@ -1,0 +1,88 @@
+// 2D detection, the paper's chain for one image: a 3x3 filter, RGB -> HSI colour segmentation,
+// morphological clean-up, contours by border following, invariant Hu moments matched against
+// the class's template shape, centroid (centre of gravity), area and bounding box.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+#include "ptz/config.hpp"
+
+namespace ptz::perception {
+
+struct ColorClass {
+  std::string name;
+  // Hue window in degrees (0..360); min > max wraps through 0 (red: 340..20).
+  double hue_min_deg = 0, hue_max_deg = 360;
+  // HSI saturation 1 - min(R,G,B)/I, 0..1.
+  double saturation_min = 0.4, saturation_max = 1.0;
+  // HSI intensity (R+G+B)/3, 0..255.
+  double intensity_min = 20, intensity_max = 255;
+  // Template shape: "circle", "square" or "any".
+  std::string shape = "circle";
+  // Largest accepted relative distance of the region's shape invariant from the template's.
+  double max_shape_distance = 0.025;
+  // Largest accepted elongation (0 round or square, 1 a line); a sphere seen off-axis is an
+  // ellipse, so "circle" accepts ellipses up to this.
+  double max_elongation = 0.5;
+  double min_area_px2 = 30;
+  double max_area_px2 = 200000;
+};
+
+struct DetectorParams {
+  int filter_size_px = 3;  // median filter (the paper's 3x3 mask)
+  int morph_size_px = 3;   // opening then closing
+  std::vector<ColorClass> classes;
+
+  // Reads the config section `classes` (a list of maps with the fields of ColorClass).
+  static DetectorParams fromConfig(const cv::FileNode& classes, const std::string& where);
+};
+
+struct Region {
+  int class_index = -1;
+  cv::Point2d centroid_px;  // centre of gravity of the region (distorted image coordinates)
+  double area_px2 = 0;
+  cv::Rect bbox;
+  double shape_distance = 0;
+  double elongation = 0;
+};
+
+// From Hu's first two invariants phi1, phi2: the shape invariant sqrt(phi1^2 - phi2) / 2, which
+// is the same for every ellipse (1 / 4 pi), so a sphere matches a circle however perspective
+// stretches it, while a square (1/12) is 4.7 % away; and the elongation sqrt(phi2) / phi1
+// ((a/b - b/a) / (a/b + b/a) for an ellipse of axes a, b). The higher Hu moments of blobs of a
+// few hundred pixels are noise.
+struct ShapeScore {
+  double distance = 0;  // relative difference of the shape invariants
+  double elongation = 0;
+};
+ShapeScore huShape(const cv::Moments& shape, const cv::Moments& templ);
+
+class Detector {
+ public:
+  explicit Detector(DetectorParams params);
+
+  // Regions of every class in an 8-bit BGR image, largest first within a class.
+  std::vector<Region> detect(const cv::Mat& bgr) const;
+  // Whether a BGR colour falls in a class's HSI window (the definition the table is built from).
+  static bool inClass(const ColorClass& c, uchar b, uchar g, uchar r);
+  // The segmentation mask of class `index` in a (filtered) BGR image, after clean-up.
+  cv::Mat mask(const cv::Mat& bgr, size_t index) const;
+  const DetectorParams& params() const { return params_; }
+
+ private:
+  void label(const cv::Mat& bgr, cv::Mat* labels) const;
+  // The class's mask; *roi: the part of it that holds the class's pixels (empty: none).
+  cv::Mat maskFromLabels(const cv::Mat& labels, size_t index, cv::Rect* roi) const;
+
+  DetectorParams params_;
+  std::vector<cv::Moments> templates_;
+  cv::Mat kernel_;
+  // RGB -> HSI segmentation of every 24-bit colour, computed once: bit k set when the colour is
+  // in class k (up to 8 classes). Exact, and one lookup per pixel instead of a conversion.
+  std::vector<uint8_t> class_table_;
+};
+
+}  // namespace ptz::perception

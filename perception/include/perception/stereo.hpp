@@ -1,0 +1,51 @@
+// Left/right association of 2D regions with the epipolar constraint of the frame's own geometry
+// (the rig model at the frame's pan/tilt/zoom), and triangulation in the head frame with a
+// covariance propagated from pixel noise.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <vector>
+
+#include "perception/detector.hpp"
+#include "ptz/rig.hpp"
+
+namespace ptz::perception {
+
+struct StereoParams {
+  double max_epipolar_px = 3.0;   // largest distance of a match from its epipolar line
+  double max_area_ratio = 2.0;    // largest area ratio (after correcting for focal lengths)
+  double pixel_sigma_px = 0.3;    // centroid noise, for the covariance
+  double min_range_m = 0.3;
+  double max_range_m = 50.0;
+};
+
+struct StereoObject {
+  int left = -1, right = -1;  // indices into the left and right regions
+  int class_index = -1;
+  Eigen::Vector3d position_head_m = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();
+  double epipolar_px = 0;
+};
+
+// A pixel of the view's (distorted) image as a unit ray in the head frame.
+Eigen::Vector3d pixelRay(const CameraView& view, const Eigen::Vector2d& pixel);
+
+// The point nearest both rays (midpoint of the shortest segment between them); false if the
+// rays are parallel or the point is behind a camera.
+bool triangulate(const CameraView& left, const CameraView& right, const Eigen::Vector2d& left_px,
+                 const Eigen::Vector2d& right_px, Eigen::Vector3d* point_head,
+                 double* epipolar_px = nullptr);
+
+// Covariance of the triangulated point for isotropic pixel noise sigma_px in both images
+// (first-order propagation through triangulate()).
+Eigen::Matrix3d triangulationCovariance(const CameraView& left, const CameraView& right,
+                                        const Eigen::Vector2d& left_px,
+                                        const Eigen::Vector2d& right_px, double sigma_px);
+
+// Pairs regions of the same class, best (smallest epipolar distance) first, each region once.
+std::vector<StereoObject> associate(const std::vector<Region>& left,
+                                    const std::vector<Region>& right, const CameraView& left_view,
+                                    const CameraView& right_view, const StereoParams& params);
+
+}  // namespace ptz::perception

@@ -1,0 +1,216 @@
+// ptz-detect: STEREO_FRAME -> OBJECT_DETECTIONS + OBJECT_POSE. Always the newest frame (queue of
+// one); every output carries the source frame's utime and seq; bad frames are dropped, counted
+// and warned about, never fatal.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "perception/detector.hpp"
+#include "perception/stereo.hpp"
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_detections_t.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+
+namespace ptz::perception {
+namespace {
+
+void declare(Params& p) {
+  addTransportParams(p);
+  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  p.add("target_class", "red_ball", "class of the object of interest (OBJECT_POSE target_index)");
+  p.add("filter_size_px", 3, "px", "median filter size (odd)");
+  p.add("morph_size_px", 3, "px", "opening/closing kernel size");
+  p.add("max_epipolar_px", 3.0, "px", "largest distance of a left/right match from its epipolar line");
+  p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match");
+  p.add("pixel_sigma_px", 0.3, "px", "centroid noise for the pose covariance");
+  p.add("min_range_m", 0.3, "m", "nearest accepted object");
+  p.add("max_range_m", 50.0, "m", "farthest accepted object");
+  p.addSection("classes", "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
+                          "intensity_min, intensity_max, shape: circle|square|any, "
+                          "max_shape_distance, max_elongation, min_area_px2, max_area_px2}");
+}
+
+ptzstereo::detection_2d_t toMessage(const Region& r, const DetectorParams& dp) {
+  ptzstereo::detection_2d_t d{};
+  d.class_name = dp.classes[static_cast<size_t>(r.class_index)].name;
+  d.centroid_x_px = r.centroid_px.x;
+  d.centroid_y_px = r.centroid_px.y;
+  d.area_px2 = r.area_px2;
+  d.bbox_x_px = r.bbox.x;
+  d.bbox_y_px = r.bbox.y;
+  d.bbox_width_px = r.bbox.width;
+  d.bbox_height_px = r.bbox.height;
+  d.shape_distance = r.shape_distance;
+  d.match_index = -1;
+  return d;
+}
+
+class DetectNode {
+ public:
+  DetectNode(const Params& p, lcm::LCM* lcm, StereoRig rig, DetectorParams dp)
+      : lcm_(lcm),
+        status_(lcm, p, "ptz-detect"),
+        rig_(std::move(rig)),
+        detector_(std::move(dp)),
+        target_class_(p.getString("target_class")),
+        ch_frame_(channel(p, channels::kStereoFrame)),
+        ch_detections_(channel(p, channels::kObjectDetections)),
+        ch_pose_(channel(p, channels::kObjectPose)) {
+    stereo_.max_epipolar_px = p.getDouble("max_epipolar_px");
+    stereo_.max_area_ratio = p.getDouble("max_area_ratio");
+    stereo_.pixel_sigma_px = p.getDouble("pixel_sigma_px");
+    stereo_.min_range_m = p.getDouble("min_range_m");
+    stereo_.max_range_m = p.getDouble("max_range_m");
+    lcm::Subscription* sub = lcm_->subscribe(ch_frame_, &DetectNode::onFrame, this);
+    sub->setQueueCapacity(1);  // always the newest frame, never a backlog
+  }
+
+  int run() {
+    while (!StopFlag::stopRequested()) {
+      lcm_->handleTimeout(100);
+      status_.maybePublish();
+    }
+    status_.publishNow();
+    return 0;
+  }
+
+ private:
+  bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
+    std::string error;
+    if (!decodeImage(m.left, left, &error) || !decodeImage(m.right, right, &error)) {
+      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
+      return false;
+    }
+    if (left->cols != rig_.left.width || left->rows != rig_.left.height ||
+        right->size() != left->size() || left->channels() != 3) {
+      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are not " +
+                                std::to_string(rig_.left.width) + "x" +
+                                std::to_string(rig_.left.height) + " BGR as the rig file says");
+      return false;
+    }
+    return true;
+  }
+
+  void drop(const std::string& reason, const std::string& message) {
+    status_.countDropped(ch_frame_, reason);
+    log_.warn(reason, "ptz-detect: dropped " + message);
+  }
+
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::stereo_frame_t* m) {
+    const int64_t received = wallUtime();
+    status_.countIn(ch_frame_, (received - m->utime) / 1000.0);
+    cv::Mat left, right;
+    if (!decode(*m, &left, &right)) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<Region> lr = detector_.detect(left), rr = detector_.detect(right);
+    const CameraView lv = rig_.view(Side::kLeft, {m->left.pan_rad, m->left.tilt_rad, m->left.zoom});
+    const CameraView rv =
+        rig_.view(Side::kRight, {m->right.pan_rad, m->right.tilt_rad, m->right.zoom});
+    const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
+    processing_ms_.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+
+    ptzstereo::object_detections_t det{};
+    det.utime = m->utime;
+    det.frame_seq = m->seq;
+    for (const auto& r : lr) det.left.push_back(toMessage(r, detector_.params()));
+    for (const auto& r : rr) det.right.push_back(toMessage(r, detector_.params()));
+    det.num_left = static_cast<int32_t>(det.left.size());
+    det.num_right = static_cast<int32_t>(det.right.size());
+
+    ptzstereo::object_pose_t pose{};
+    pose.utime = m->utime;
+    pose.frame_seq = m->seq;
+    pose.target_index = -1;
+    pose.left_ptz = {m->left.pan_rad, m->left.tilt_rad, m->left.zoom};
+    pose.right_ptz = {m->right.pan_rad, m->right.tilt_rad, m->right.zoom};
+    for (const auto& o : objects) {
+      det.left[static_cast<size_t>(o.left)].match_index = o.right;
+      det.right[static_cast<size_t>(o.right)].match_index = o.left;
+      ptzstereo::object_3d_t obj{};
+      obj.class_name = detector_.params().classes[static_cast<size_t>(o.class_index)].name;
+      for (int r = 0; r < 3; ++r) {
+        obj.position_m[r] = o.position_head_m[r];
+        for (int c = 0; c < 3; ++c) obj.covariance_m2[r * 3 + c] = o.covariance_m2(r, c);
+      }
+      obj.left_index = o.left;
+      obj.right_index = o.right;
+      // Apparent radius of a disc of the region's area, back to metres at the object's range.
+      const double r_px = std::sqrt(lr[static_cast<size_t>(o.left)].area_px2 / M_PI);
+      obj.radius_m = r_px * (o.position_head_m - lv.position_head_m).norm() / lv.intrinsics.fx;
+      // The target: the largest region of the target class (regions come largest first).
+      if (obj.class_name == target_class_ &&
+          (pose.target_index < 0 ||
+           pose.objects[static_cast<size_t>(pose.target_index)].left_index > o.left)) {
+        pose.target_index = static_cast<int32_t>(pose.objects.size());
+      }
+      pose.objects.push_back(obj);
+    }
+    pose.num_objects = static_cast<int32_t>(pose.objects.size());
+    det.publish_utime = wallUtime();
+    lcm_->publish(ch_detections_, &det);
+    status_.countOut(ch_detections_, (det.publish_utime - m->utime) / 1000.0);
+    pose.publish_utime = wallUtime();
+    lcm_->publish(ch_pose_, &pose);
+    status_.countOut(ch_pose_, (pose.publish_utime - m->utime) / 1000.0);
+    status_.increment("frames_processed");
+    if (pose.target_index < 0) status_.increment("frames_without_target");
+    if (processing_ms_.size() >= 30) {
+      status_.setCounter("processing_us_p50", static_cast<int64_t>(percentile(processing_ms_, 50) * 1000));
+      status_.setCounter("processing_us_p99", static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
+      processing_ms_.clear();
+    }
+  }
+
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  StereoRig rig_;
+  Detector detector_;
+  StereoParams stereo_;
+  std::string target_class_;
+  std::string ch_frame_, ch_detections_, ch_pose_;
+  std::vector<double> processing_ms_;
+};
+
+}  // namespace
+}  // namespace ptz::perception
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-detect", "Finds coloured objects of known shape in both images of every "
+                              "STEREO_FRAME, pairs them along epipolar lines, triangulates them "
+                              "and publishes OBJECT_DETECTIONS and OBJECT_POSE.");
+  perception::declare(params);
+  try {
+    if (!params.parse(argc, argv)) return 0;
+    if (params.configPath().empty()) {
+      throw ConfigError("--config FILE is required (it holds the colour classes; see "
+                        "config/detect_default.yaml)");
+    }
+    const std::string where = "config file '" + params.configPath() + "'";
+    perception::DetectorParams dp =
+        perception::DetectorParams::fromConfig(params.section("classes"), where);
+    dp.filter_size_px = params.getInt("filter_size_px");
+    dp.morph_size_px = params.getInt("morph_size_px");
+    if (dp.filter_size_px < 1 || dp.filter_size_px % 2 == 0 || dp.morph_size_px < 1) {
+      throw ConfigError("filter_size_px must be odd and >= 1, morph_size_px >= 1");
+    }
+    StereoRig rig = params.getString("rig_file").empty() ? StereoRig::makeDefault()
+                                                         : StereoRig::load(params.getString("rig_file"));
+    const std::string url = lcmUrl(params);
+    warnIfReceiveBufferSmall(url);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) {
+      std::fprintf(stderr, "ptz-detect: cannot open LCM at '%s'\n", url.c_str());
+      return 1;
+    }
+    StopFlag::install();
+    perception::DetectNode node(params, &lcm, std::move(rig), std::move(dp));
+    return node.run();
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "ptz-detect: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,165 @@
+// The controller against the rig model: aiming, the zoom law, both modes, lost targets, limits.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "control/controller.hpp"
+#include "control/pointing.hpp"
+
+using ptz::PtzPose;
+using ptz::Side;
+using ptz::StereoRig;
+namespace control = ptz::control;
+
+TEST(Pointing, AimPutsThePointAtTheImageCentreOfEitherCamera) {
+  const StereoRig rig = StereoRig::makeDefault();  // optical centres 4 cm in front of the pivots
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> x(-3, 3), y(-1, 1), z(0.8, 6), zoom(1, 8);
+  for (int i = 0; i < 50; ++i) {
+    const Eigen::Vector3d p(x(rng), y(rng), z(rng));
+    for (Side side : {Side::kLeft, Side::kRight}) {
+      const double zm = zoom(rng);
+      double pan = 0, tilt = 0;
+      ASSERT_TRUE(control::aimAt(rig, side, p, zm, control::imageCentre(rig.camera(side)), &pan,
+                                 &tilt));
+      const Eigen::Vector2d px = rig.view(side, {pan, tilt, zm}).project(p);
+      EXPECT_NEAR(px.x(), 319.5, 1e-3);
+      EXPECT_NEAR(px.y(), 239.5, 1e-3);
+    }
+  }
+}
+
+TEST(Pointing, ZoomForFocalLengthInvertsTheZoomTable) {
+  const StereoRig rig = StereoRig::makeDefault();
+  for (double z : {1.0, 1.7, 2.0, 3.3, 6.5, 10.0}) {
+    EXPECT_NEAR(control::zoomForFocalLength(rig.left, rig.left.intrinsicsAt(z).fx), z, 1e-9);
+  }
+  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 10.0), 1.0);   // below the table
+  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 1e6), 10.0);   // above it
+}
+
+namespace {
+
+struct Aim {
+  double pan, tilt;
+};
+Aim aim(const StereoRig& rig, Side side, const Eigen::Vector3d& p, double zoom) {
+  Aim a{};
+  control::aimAt(rig, side, p, zoom, control::imageCentre(rig.camera(side)), &a.pan, &a.tilt);
+  return a;
+}
+
+control::ControllerParams fast() {
+  control::ControllerParams p;
+  p.max_setpoint_rate = 1000;  // no slew limit unless a test wants one
+  return p;
+}
+
+}  // namespace
+
+TEST(Controller, PaperModeIsAProportionalElementOnTheAngularError) {
+  const StereoRig rig = StereoRig::makeDefault();
+  auto params = fast();
+  params.mode = "paper";
+  params.zoom_mode = "hold";
+  control::Controller c(rig, params);
+  const Eigen::Vector3d p(0.6, -0.2, 3.0);
+  const PtzPose lc{0.05, 0.02, 1}, rc{0.04, 0.01, 1};
+  const auto sp = c.update(0.0, control::Observation{p, 0.1}, lc, rc);
+  const Aim al = aim(rig, Side::kLeft, p, 1), ar = aim(rig, Side::kRight, p, 1);
+  EXPECT_NEAR(sp[0].pan_rad, 1.7 * (al.pan - lc.pan_rad), 1e-9);
+  EXPECT_NEAR(sp[0].tilt_rad, 1.7 * (al.tilt - lc.tilt_rad), 1e-9);
+  EXPECT_NEAR(sp[1].pan_rad, 1.7 * (ar.pan - rc.pan_rad), 1e-9);
+  EXPECT_DOUBLE_EQ(sp[0].zoom, 1.0);  // held
+}
+
+TEST(Controller, TrackModeHasNoSteadyStateErrorForAStillTarget) {
+  const StereoRig rig = StereoRig::makeDefault();
+  control::Controller c(rig, fast());
+  const Eigen::Vector3d p(-0.8, 0.3, 2.5);
+  std::array<PtzPose, 2> sp{};
+  for (int k = 0; k < 30; ++k) sp = c.update(k / 30.0, control::Observation{p, 0.1}, sp[0], sp[1]);
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const int i = static_cast<int>(side);
+    const Aim a = aim(rig, side, p, sp[i].zoom);
+    // 1e-6 rad: a thousandth of a pixel at 10x zoom.
+    EXPECT_NEAR(sp[i].pan_rad, a.pan, 1e-6);
+    EXPECT_NEAR(sp[i].tilt_rad, a.tilt, 1e-6);
+    // The zoom gives the 0.1 m ball a radius of 30 px.
+    Eigen::Matrix3d R;
+    Eigen::Vector3d centre;
+    rig.cameraPose(side, sp[i].pan_rad, sp[i].tilt_rad, &R, &centre);
+    EXPECT_NEAR(rig.camera(side).intrinsicsAt(sp[i].zoom).fx * 0.1 / (p - centre).norm(), 30.0,
+                0.3);
+  }
+}
+
+TEST(Controller, TrackModeLeadsAMovingTargetByItsRateTimesTheLead) {
+  const StereoRig rig = StereoRig::makeDefault();
+  auto params = fast();
+  params.zoom_mode = "hold";
+  control::Controller c(rig, params);
+  // A target sweeping across at 3 m: its bearing changes at a nearly constant rate.
+  std::array<PtzPose, 2> sp{};
+  Eigen::Vector3d p;
+  for (int k = 0; k < 120; ++k) {
+    p = Eigen::Vector3d(-0.5 + 0.3 * k / 30.0, 0.0, 3.0);
+    sp = c.update(k / 30.0, control::Observation{p, 0.1}, sp[0], sp[1]);
+  }
+  const double dt = 1e-3;
+  const Aim now = aim(rig, Side::kLeft, p, 1), before =
+      aim(rig, Side::kLeft, p - Eigen::Vector3d(0.3 * dt, 0, 0), 1);
+  const double rate = (now.pan - before.pan) / dt;
+  EXPECT_NEAR(sp[0].pan_rad, now.pan + rate * params.lead_s, 0.02 * rate * params.lead_s);
+}
+
+TEST(Controller, LostTargetHoldsThenReturnsHomeAndResumesWithoutAJump) {
+  const StereoRig rig = StereoRig::makeDefault();
+  control::ControllerParams params;  // default slew limit 3 rad/s
+  control::Controller c(rig, params);
+  const Eigen::Vector3d p(1.5, -0.4, 3.0);
+  std::array<PtzPose, 2> sp{};
+  double t = 0;
+  for (; t < 2.0; t += 1 / 30.0) sp = c.update(t, control::Observation{p, 0.1}, sp[0], sp[1]);
+  const auto tracked = sp;
+  // Lost: held for lost_hold_s ...
+  for (; t < 2.0 + params.lost_hold_s - 0.05; t += 1 / 30.0) {
+    sp = c.update(t, std::nullopt, sp[0], sp[1]);
+    EXPECT_DOUBLE_EQ(sp[0].pan_rad, tracked[0].pan_rad);
+  }
+  // ... then back towards home at home_rate.
+  double previous = sp[0].pan_rad;
+  for (; t < 4.0; t += 1 / 30.0) {
+    sp = c.update(t, std::nullopt, sp[0], sp[1]);
+    EXPECT_LE(previous - sp[0].pan_rad, params.home_rate / 30.0 + 1e-9);
+    EXPECT_LE(sp[0].pan_rad, previous + 1e-12);
+    previous = sp[0].pan_rad;
+  }
+  EXPECT_LT(sp[0].pan_rad, tracked[0].pan_rad - 0.3);
+  // Found again: the setpoint slews, it does not jump.
+  const auto before = sp;
+  sp = c.update(t, control::Observation{p, 0.1}, sp[0], sp[1]);
+  EXPECT_LE(std::abs(sp[0].pan_rad - before[0].pan_rad), params.max_setpoint_rate / 30.0 + 1e-9);
+  EXPECT_GT(sp[0].pan_rad, before[0].pan_rad);
+}
+
+TEST(Controller, ImplausibleTargetsAreIgnoredAndLimitsHold) {
+  const StereoRig rig = StereoRig::makeDefault();
+  auto params = fast();
+  control::Controller c(rig, params);
+  const double nan = std::nan("");
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(nan, 0, 3), 0.1}));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 1e6), 0.1}));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, -2), 0.1}));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 3), std::numeric_limits<double>::infinity()}));
+  EXPECT_TRUE(c.plausible({Eigen::Vector3d(0, 0, 3), 0.1}));
+  // A target far up: tilt stops at its +90 deg limit... and far right beyond pan's 170 deg.
+  std::array<PtzPose, 2> sp{};
+  for (int k = 0; k < 10; ++k) {
+    sp = c.update(k / 30.0, control::Observation{Eigen::Vector3d(0.01, -30, 0.02), 0.1}, sp[0], sp[1]);
+  }
+  EXPECT_LE(sp[0].tilt_rad, params.limits.axis[1].max_position);
+  EXPECT_GE(sp[0].zoom, 1.0);
+  EXPECT_LE(sp[0].zoom, params.max_zoom);
+}
