@@ -16,11 +16,13 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms(Clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
+double ms(Clock::duration d) {
+  return std::chrono::duration<double, std::milli>(d).count();
+}
 
 void report(const char* what, const std::vector<double>& v) {
-  std::printf("%-48s median %8.3f ms   p99 %8.3f ms   (n = %zu)\n", what,
-              ptz::percentile(v, 50), ptz::percentile(v, 99), v.size());
+  std::printf("%-48s median %8.3f ms   p99 %8.3f ms   (n = %zu)\n", what, ptz::percentile(v, 50),
+              ptz::percentile(v, 99), v.size());
 }
 
 }  // namespace

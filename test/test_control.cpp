@@ -21,8 +21,8 @@ TEST(Pointing, AimPutsThePointAtTheImageCentreOfEitherCamera) {
     for (Side side : {Side::kLeft, Side::kRight}) {
       const double zm = zoom(rng);
       double pan = 0, tilt = 0;
-      ASSERT_TRUE(control::aimAt(rig, side, p, zm, control::imageCentre(rig.camera(side)), &pan,
-                                 &tilt));
+      ASSERT_TRUE(
+          control::aimAt(rig, side, p, zm, control::imageCentre(rig.camera(side)), &pan, &tilt));
       const Eigen::Vector2d px = rig.view(side, {pan, tilt, zm}).project(p);
       EXPECT_NEAR(px.x(), 319.5, 1e-3);
       EXPECT_NEAR(px.y(), 239.5, 1e-3);
@@ -35,8 +35,8 @@ TEST(Pointing, ZoomForFocalLengthInvertsTheZoomTable) {
   for (double z : {1.0, 1.7, 2.0, 3.3, 6.5, 10.0}) {
     EXPECT_NEAR(control::zoomForFocalLength(rig.left, rig.left.intrinsicsAt(z).fx), z, 1e-9);
   }
-  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 10.0), 1.0);   // below the table
-  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 1e6), 10.0);   // above it
+  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 10.0), 1.0);  // below the table
+  EXPECT_DOUBLE_EQ(control::zoomForFocalLength(rig.left, 1e6), 10.0);  // above it
 }
 
 namespace {
@@ -108,8 +108,8 @@ TEST(Controller, TrackModeLeadsAMovingTargetByItsRateTimesTheLead) {
     sp = c.update(k / 30.0, control::Observation{p, 0.1}, sp[0], sp[1]);
   }
   const double dt = 1e-3;
-  const Aim now = aim(rig, Side::kLeft, p, 1), before =
-      aim(rig, Side::kLeft, p - Eigen::Vector3d(0.3 * dt, 0, 0), 1);
+  const Aim now = aim(rig, Side::kLeft, p, 1),
+            before = aim(rig, Side::kLeft, p - Eigen::Vector3d(0.3 * dt, 0, 0), 1);
   const double rate = (now.pan - before.pan) / dt;
   EXPECT_NEAR(sp[0].pan_rad, now.pan + rate * params.lead_s, 0.02 * rate * params.lead_s);
 }
@@ -157,7 +157,8 @@ TEST(Controller, ImplausibleTargetsAreIgnoredAndLimitsHold) {
   // A target far up: tilt stops at its +90 deg limit... and far right beyond pan's 170 deg.
   std::array<PtzPose, 2> sp{};
   for (int k = 0; k < 10; ++k) {
-    sp = c.update(k / 30.0, control::Observation{Eigen::Vector3d(0.01, -30, 0.02), 0.1}, sp[0], sp[1]);
+    sp = c.update(k / 30.0, control::Observation{Eigen::Vector3d(0.01, -30, 0.02), 0.1}, sp[0],
+                  sp[1]);
   }
   EXPECT_LE(sp[0].tilt_rad, params.limits.axis[1].max_position);
   EXPECT_GE(sp[0].zoom, 1.0);

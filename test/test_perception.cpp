@@ -76,8 +76,8 @@ TEST(Detector, CentroidIsTheProjectionOfTheTrueCentreWithinOnePixel) {
   const perception::Detector detector(defaultClasses());
   const int red = classIndex(detector.params(), "red_ball");
   const std::vector<std::pair<Eigen::Vector3d, PtzPose>> cases = {
-      {{0.0, 0.0, 3.0}, {0, 0, 1}},         {{1.0, -0.4, 2.5}, {0, 0, 1}},
-      {{-0.8, 0.5, 2.0}, {-0.2, -0.1, 1}},  {{0.6, 0.1, 4.5}, {0.15, 0, 3}},
+      {{0.0, 0.0, 3.0}, {0, 0, 1}},          {{1.0, -0.4, 2.5}, {0, 0, 1}},
+      {{-0.8, 0.5, 2.0}, {-0.2, -0.1, 1}},   {{0.6, 0.1, 4.5}, {0.15, 0, 3}},
       {{-0.3, -0.2, 1.5}, {-0.1, 0.1, 1.5}},
   };
   for (const auto& [p, pose] : cases) {
@@ -141,8 +141,8 @@ TEST(Stereo, StaticObjectsAt1To5MetresWithinHalfAPercentOfRange) {
     scene.objects = {object("red_ball", sim::SceneObject::Shape::kSphere, p, kRed)};
     const sim::SimFrame f = render(rig, scene, lp, rp);
     const auto lr = detector.detect(f.left), rr = detector.detect(f.right);
-    const auto objects = perception::associate(lr, rr, rig.view(Side::kLeft, lp),
-                                               rig.view(Side::kRight, rp), {});
+    const auto objects =
+        perception::associate(lr, rr, rig.view(Side::kLeft, lp), rig.view(Side::kRight, rp), {});
     ASSERT_EQ(objects.size(), 1u) << "case " << i << " at " << p.transpose();
     const double err = (objects[0].position_head_m - p).norm();
     worst_pct = std::max(worst_pct, 100 * err / r);

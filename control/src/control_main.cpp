@@ -55,8 +55,9 @@ ControllerParams controllerParams(const Params& p) {
   }
   if (!(c.target_radius_px > 0) || !(c.max_setpoint_rate > 0) || !(c.home_rate > 0) ||
       c.lead_s < 0 || !(c.rate_filter_s > 0)) {
-    throw ConfigError("target_radius_px, max_setpoint_rate, home_rate, rate_filter_s must be > 0 "
-                      "and lead_s >= 0");
+    throw ConfigError(
+        "target_radius_px, max_setpoint_rate, home_rate, rate_filter_s must be > 0 "
+        "and lead_s >= 0");
   }
   return c;
 }
@@ -79,6 +80,7 @@ class ControlNode {
   }
 
   int run() {
+    status_.publishNow();  // "up and subscribed": tests and scripts wait for it
     while (!StopFlag::stopRequested()) {
       lcm_->handleTimeout(100);
       status_.maybePublish();
@@ -137,14 +139,16 @@ class ControlNode {
 
 int main(int argc, char** argv) {
   using namespace ptz;
-  Params params("ptz-control", "Steers pan, tilt and zoom of both heads to keep the target of "
-                               "OBJECT_POSE centred in both images at a constant apparent size; "
-                               "publishes PTZ_SETPOINT, one per pose.");
+  Params params("ptz-control",
+                "Steers pan, tilt and zoom of both heads to keep the target of "
+                "OBJECT_POSE centred in both images at a constant apparent size; "
+                "publishes PTZ_SETPOINT, one per pose.");
   control::declare(params);
   try {
     if (!params.parse(argc, argv)) return 0;
-    StereoRig rig = params.getString("rig_file").empty() ? StereoRig::makeDefault()
-                                                         : StereoRig::load(params.getString("rig_file"));
+    StereoRig rig = params.getString("rig_file").empty()
+                        ? StereoRig::makeDefault()
+                        : StereoRig::load(params.getString("rig_file"));
     const std::string url = lcmUrl(params);
     lcm::LCM lcm(url);
     if (!lcm.good()) {

@@ -27,8 +27,7 @@ bool Controller::plausible(const Observation& o) const {
   return range >= p_.min_range_m && range <= p_.max_range_m && o.position_head_m.z() > 0;
 }
 
-PtzPose Controller::desired(Side side, const Observation& o, const PtzPose& at_capture,
-                            double dt) {
+PtzPose Controller::desired(Side side, const Observation& o, const PtzPose& at_capture, double dt) {
   const int i = static_cast<int>(side);
   const CameraSpec& spec = rig_.camera(side);
   PtzPose goal = setpoint_[i];

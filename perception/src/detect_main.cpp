@@ -21,14 +21,16 @@ void declare(Params& p) {
   p.add("target_class", "red_ball", "class of the object of interest (OBJECT_POSE target_index)");
   p.add("filter_size_px", 3, "px", "median filter size (odd)");
   p.add("morph_size_px", 3, "px", "opening/closing kernel size");
-  p.add("max_epipolar_px", 3.0, "px", "largest distance of a left/right match from its epipolar line");
+  p.add("max_epipolar_px", 3.0, "px",
+        "largest distance of a left/right match from its epipolar line");
   p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match");
   p.add("pixel_sigma_px", 0.3, "px", "centroid noise for the pose covariance");
   p.add("min_range_m", 0.3, "m", "nearest accepted object");
   p.add("max_range_m", 50.0, "m", "farthest accepted object");
-  p.addSection("classes", "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
-                          "intensity_min, intensity_max, shape: circle|square|any, "
-                          "max_shape_distance, max_elongation, min_area_px2, max_area_px2}");
+  p.addSection("classes",
+               "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
+               "intensity_min, intensity_max, shape: circle|square|any, "
+               "max_shape_distance, max_elongation, min_area_px2, max_area_px2}");
 }
 
 ptzstereo::detection_2d_t toMessage(const Region& r, const DetectorParams& dp) {
@@ -67,6 +69,7 @@ class DetectNode {
   }
 
   int run() {
+    status_.publishNow();  // "up and subscribed": tests and scripts wait for it
     while (!StopFlag::stopRequested()) {
       lcm_->handleTimeout(100);
       status_.maybePublish();
@@ -103,7 +106,12 @@ class DetectNode {
     cv::Mat left, right;
     if (!decode(*m, &left, &right)) return;
     const auto t0 = std::chrono::steady_clock::now();
-    const std::vector<Region> lr = detector_.detect(left), rr = detector_.detect(right);
+    // Left and right on two cores (Detector::detect is const and shares nothing mutable).
+    std::vector<Region> lr, rr;
+    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i)
+        (i == 0 ? lr : rr) = detector_.detect(i == 0 ? left : right);
+    });
     const CameraView lv = rig_.view(Side::kLeft, {m->left.pan_rad, m->left.tilt_rad, m->left.zoom});
     const CameraView rv =
         rig_.view(Side::kRight, {m->right.pan_rad, m->right.tilt_rad, m->right.zoom});
@@ -157,8 +165,10 @@ class DetectNode {
     status_.increment("frames_processed");
     if (pose.target_index < 0) status_.increment("frames_without_target");
     if (processing_ms_.size() >= 30) {
-      status_.setCounter("processing_us_p50", static_cast<int64_t>(percentile(processing_ms_, 50) * 1000));
-      status_.setCounter("processing_us_p99", static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
+      status_.setCounter("processing_us_p50",
+                         static_cast<int64_t>(percentile(processing_ms_, 50) * 1000));
+      status_.setCounter("processing_us_p99",
+                         static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
       processing_ms_.clear();
     }
   }
@@ -179,15 +189,17 @@ class DetectNode {
 
 int main(int argc, char** argv) {
   using namespace ptz;
-  Params params("ptz-detect", "Finds coloured objects of known shape in both images of every "
-                              "STEREO_FRAME, pairs them along epipolar lines, triangulates them "
-                              "and publishes OBJECT_DETECTIONS and OBJECT_POSE.");
+  Params params("ptz-detect",
+                "Finds coloured objects of known shape in both images of every "
+                "STEREO_FRAME, pairs them along epipolar lines, triangulates them "
+                "and publishes OBJECT_DETECTIONS and OBJECT_POSE.");
   perception::declare(params);
   try {
     if (!params.parse(argc, argv)) return 0;
     if (params.configPath().empty()) {
-      throw ConfigError("--config FILE is required (it holds the colour classes; see "
-                        "config/detect_default.yaml)");
+      throw ConfigError(
+          "--config FILE is required (it holds the colour classes; see "
+          "config/detect_default.yaml)");
     }
     const std::string where = "config file '" + params.configPath() + "'";
     perception::DetectorParams dp =
@@ -197,8 +209,9 @@ int main(int argc, char** argv) {
     if (dp.filter_size_px < 1 || dp.filter_size_px % 2 == 0 || dp.morph_size_px < 1) {
       throw ConfigError("filter_size_px must be odd and >= 1, morph_size_px >= 1");
     }
-    StereoRig rig = params.getString("rig_file").empty() ? StereoRig::makeDefault()
-                                                         : StereoRig::load(params.getString("rig_file"));
+    StereoRig rig = params.getString("rig_file").empty()
+                        ? StereoRig::makeDefault()
+                        : StereoRig::load(params.getString("rig_file"));
     const std::string url = lcmUrl(params);
     warnIfReceiveBufferSmall(url);
     lcm::LCM lcm(url);

@@ -24,7 +24,6 @@ double optional(const cv::FileNode& n, const std::string& field, const std::stri
   return n[field].empty() ? fallback : readDouble(n, field, where);
 }
 
-
 struct Hsi {
   double hue_deg, saturation, intensity;
 };
@@ -77,7 +76,8 @@ DetectorParams DetectorParams::fromConfig(const cv::FileNode& classes, const std
     c.min_area_px2 = optional(n, "min_area_px2", w, c.min_area_px2);
     c.max_area_px2 = optional(n, "max_area_px2", w, c.max_area_px2);
     if (c.shape != "circle" && c.shape != "square" && c.shape != "any") {
-      throw ConfigError(w + ": field 'shape' must be circle, square or any (got '" + c.shape + "')");
+      throw ConfigError(w + ": field 'shape' must be circle, square or any (got '" + c.shape +
+                        "')");
     }
     for (double h : {c.hue_min_deg, c.hue_max_deg}) {
       if (h < 0 || h > 360) throw ConfigError(w + ": hue limits must be within 0..360 degrees");
@@ -124,7 +124,6 @@ Detector::Detector(DetectorParams params)
   });
 }
 
-
 bool Detector::inClass(const ColorClass& c, uchar b, uchar g, uchar r) {
   return inWindow(c, toHsi(b, g, r), b == g && g == r);
 }
@@ -135,7 +134,8 @@ void Detector::label(const cv::Mat& bgr, cv::Mat* labels) const {
   for (int r = 0; r < bgr.rows; ++r) {
     const uchar* in = bgr.ptr<uchar>(r);
     uchar* out = labels->ptr<uchar>(r);
-    for (int c = 0; c < bgr.cols; ++c, in += 3) out[c] = table[(in[2] << 16) | (in[1] << 8) | in[0]];
+    for (int c = 0; c < bgr.cols; ++c, in += 3)
+      out[c] = table[(in[2] << 16) | (in[1] << 8) | in[0]];
   }
 }
 
@@ -175,8 +175,7 @@ std::vector<Region> Detector::detect(const cv::Mat& bgr) const {
     if (roi.empty()) continue;
     std::vector<std::vector<cv::Point>> contours;
     // Suzuki-Abe border following (the paper's chain-code contours), outer borders only.
-    cv::findContours(m(roi).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE,
-                     roi.tl());
+    cv::findContours(m(roi).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, roi.tl());
     const size_t first = regions.size();
     for (const auto& contour : contours) {
       const cv::Rect bbox = cv::boundingRect(contour);

@@ -13,8 +13,8 @@ Eigen::Vector3d pixelRay(const CameraView& view, const Eigen::Vector2d& pixel) {
   const Intrinsics& k = view.intrinsics;
   std::vector<cv::Point2d> in{{pixel.x(), pixel.y()}}, out;
   cv::undistortPoints(in, out, cv::Matx33d(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1),
-                      std::vector<double>(k.distortion.begin(), k.distortion.end()),
-                      cv::noArray(), cv::noArray(),
+                      std::vector<double>(k.distortion.begin(), k.distortion.end()), cv::noArray(),
+                      cv::noArray(),
                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
   return (view.rotation_head_camera * Eigen::Vector3d(out[0].x, out[0].y, 1.0)).normalized();
 }
@@ -81,8 +81,9 @@ std::vector<StereoObject> associate(const std::vector<Region>& left,
       candidates.push_back(o);
     }
   }
-  std::sort(candidates.begin(), candidates.end(),
-            [](const StereoObject& a, const StereoObject& b) { return a.epipolar_px < b.epipolar_px; });
+  std::sort(candidates.begin(), candidates.end(), [](const StereoObject& a, const StereoObject& b) {
+    return a.epipolar_px < b.epipolar_px;
+  });
   std::vector<StereoObject> out;
   std::vector<bool> used_left(left.size()), used_right(right.size());
   for (auto& o : candidates) {

@@ -1,9 +1,9 @@
 // Where the shared test data lives: $PTZ_DATA_DIR, else ../shared/data beside the checkout.
 #pragma once
 
+#include <sys/stat.h>
 #include <cstdlib>
 #include <string>
-#include <sys/stat.h>
 
 namespace ptz::test {
 

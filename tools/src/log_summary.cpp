@@ -29,9 +29,10 @@ bool decode(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  ptz::Params p("ptz-log-summary", "Summarises an LCM log: messages, rates and sizes per channel, "
-                                   "stereo frame gaps, each process's last status counters and "
-                                   "the closed-loop numbers of the run.");
+  ptz::Params p("ptz-log-summary",
+                "Summarises an LCM log: messages, rates and sizes per channel, "
+                "stereo frame gaps, each process's last status counters and "
+                "the closed-loop numbers of the run.");
   p.add("log", "", "the LCM log file (required)");
   p.add("json", "", "also write the run's summary as JSON to this file");
   p.add("channel_prefix", "", "prefix of the project's channel names");

@@ -47,7 +47,8 @@ RunMetrics::RunMetrics(std::string target_class, double settle_s)
 void RunMetrics::onFrame(const ptzstereo::stereo_frame_t& m) {
   ++frames_seen_;
   if (first_utime_ < 0) first_utime_ = m.utime;
-  if (last_frame_utime_ >= 0 && frame_period_us_ == 0) frame_period_us_ = m.utime - last_frame_utime_;
+  if (last_frame_utime_ >= 0 && frame_period_us_ == 0)
+    frame_period_us_ = m.utime - last_frame_utime_;
   last_frame_utime_ = m.utime;
 }
 

@@ -38,11 +38,11 @@ struct ControllerParams {
   std::string zoom_mode = "size";  // "size" (keep target_radius_px) or "hold"
   double target_radius_px = 30.0;
   double max_zoom = 4.0;
-  double lead_s = 0.3;              // feed-forward horizon (track)
-  double rate_filter_s = 0.25;      // time constant Tv of the rate estimate (track)
-  double max_setpoint_rate = 3.0;   // rad/s for pan and tilt; zoom ratio/s for zoom
+  double lead_s = 0.3;             // feed-forward horizon (track)
+  double rate_filter_s = 0.25;     // time constant Tv of the rate estimate (track)
+  double max_setpoint_rate = 3.0;  // rad/s for pan and tilt; zoom ratio/s for zoom
   double lost_hold_s = 0.5;
-  double home_rate = 0.3;           // rad/s (pan, tilt) and ratio/s (zoom) when returning home
+  double home_rate = 0.3;  // rad/s (pan, tilt) and ratio/s (zoom) when returning home
   double min_range_m = 0.3;
   double max_range_m = 50.0;
   PtzPlant::Params limits = defaultPlantParams();

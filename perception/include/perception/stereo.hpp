@@ -13,9 +13,9 @@
 namespace ptz::perception {
 
 struct StereoParams {
-  double max_epipolar_px = 3.0;   // largest distance of a match from its epipolar line
-  double max_area_ratio = 2.0;    // largest area ratio (after correcting for focal lengths)
-  double pixel_sigma_px = 0.3;    // centroid noise, for the covariance
+  double max_epipolar_px = 3.0;  // largest distance of a match from its epipolar line
+  double max_area_ratio = 2.0;   // largest area ratio (after correcting for focal lengths)
+  double pixel_sigma_px = 0.3;   // centroid noise, for the covariance
   double min_range_m = 0.3;
   double max_range_m = 50.0;
 };

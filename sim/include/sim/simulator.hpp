@@ -41,7 +41,7 @@ class Simulator {
   StereoRig rig_;
   std::unique_ptr<Scene> scene_;  // the renderer keeps a reference: a stable address
   PtzPlant plant_;
-  Renderer renderer_;
+  Renderer left_renderer_, right_renderer_;  // one each: both cameras render in parallel
   NoiseBank noise_;
   int64_t next_index_ = 0;
 };
