@@ -62,6 +62,11 @@ double readDouble(const cv::FileNode& parent, const std::string& field, const st
   return v;
 }
 
+double readDouble(const cv::FileNode& parent, const std::string& field, const std::string& where,
+                  double fallback) {
+  return parent[field].empty() ? fallback : readDouble(parent, field, where);
+}
+
 int readInt(const cv::FileNode& parent, const std::string& field, const std::string& where) {
   cv::FileNode n = readNode(parent, field, where);
   if (!n.isInt()) throw ConfigError(where + ": field '" + field + "' must be an integer");

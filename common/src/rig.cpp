@@ -191,6 +191,11 @@ void StereoRig::save(const std::string& path) const {
   fs << "R" << R << "T" << T;
 }
 
+StereoRig rigFromParams(const Params& params) {
+  const std::string path = params.getString("rig_file");
+  return path.empty() ? StereoRig::makeDefault() : StereoRig::load(path);
+}
+
 StereoRig StereoRig::makeDefault() {
   StereoRig rig;
   for (Side side : {Side::kLeft, Side::kRight}) {

@@ -148,6 +148,29 @@ bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* err
   return true;
 }
 
+int runProcess(int argc, char** argv, Params& params,
+               const std::function<int(const Params&, lcm::LCM&)>& body) {
+  const char* name = params.program().c_str();
+  try {
+    if (!params.parse(argc, argv)) return 0;
+    const std::string url = lcmUrl(params);
+    warnIfReceiveBufferSmall(url);
+    lcm::LCM lcm(url);
+    if (!lcm.good()) {
+      std::fprintf(stderr,
+                   "%s: cannot open LCM at '%s' (multicast route? scripts/check-network "
+                   "says)\n",
+                   name, url.c_str());
+      return 1;
+    }
+    StopFlag::install();
+    return body(params, lcm);
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return 2;
+  }
+}
+
 namespace {
 std::atomic<bool> g_stop{false};
 void onSignal(int) {
@@ -257,6 +280,16 @@ void StatusReporter::publishNow() {
   msg.num_counters = static_cast<int32_t>(msg.counters.size());
   lcm_->publish(channel_, &msg);
   last_publish_utime_ = now;
+}
+
+int serveUntilStopped(lcm::LCM& lcm, StatusReporter& status) {
+  status.publishNow();
+  while (!StopFlag::stopRequested()) {
+    lcm.handleTimeout(100);
+    status.maybePublish();
+  }
+  status.publishNow();
+  return 0;
 }
 
 void RateLimitedLog::warn(const std::string& key, const std::string& message) {

@@ -79,15 +79,7 @@ class ControlNode {
     lcm_->subscribe(ch_state_, &ControlNode::onState, this)->setQueueCapacity(1);
   }
 
-  int run() {
-    status_.publishNow();  // "up and subscribed": tests and scripts wait for it
-    while (!StopFlag::stopRequested()) {
-      lcm_->handleTimeout(100);
-      status_.maybePublish();
-    }
-    status_.publishNow();
-    return 0;
-  }
+  int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
   void onState(const lcm::ReceiveBuffer*, const std::string& ch, const ptzstereo::ptz_state_t*) {
@@ -144,22 +136,8 @@ int main(int argc, char** argv) {
                 "OBJECT_POSE centred in both images at a constant apparent size; "
                 "publishes PTZ_SETPOINT, one per pose.");
   control::declare(params);
-  try {
-    if (!params.parse(argc, argv)) return 0;
-    StereoRig rig = params.getString("rig_file").empty()
-                        ? StereoRig::makeDefault()
-                        : StereoRig::load(params.getString("rig_file"));
-    const std::string url = lcmUrl(params);
-    lcm::LCM lcm(url);
-    if (!lcm.good()) {
-      std::fprintf(stderr, "ptz-control: cannot open LCM at '%s'\n", url.c_str());
-      return 1;
-    }
-    StopFlag::install();
-    control::ControlNode node(params, &lcm, std::move(rig));
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    control::ControlNode node(p, &lcm, rigFromParams(p));
     return node.run();
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "ptz-control: %s\n", e.what());
-    return 2;
-  }
+  });
 }

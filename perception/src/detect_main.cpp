@@ -68,15 +68,7 @@ class DetectNode {
     sub->setQueueCapacity(1);  // always the newest frame, never a backlog
   }
 
-  int run() {
-    status_.publishNow();  // "up and subscribed": tests and scripts wait for it
-    while (!StopFlag::stopRequested()) {
-      lcm_->handleTimeout(100);
-      status_.maybePublish();
-    }
-    status_.publishNow();
-    return 0;
-  }
+  int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
   bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
@@ -194,36 +186,20 @@ int main(int argc, char** argv) {
                 "STEREO_FRAME, pairs them along epipolar lines, triangulates them "
                 "and publishes OBJECT_DETECTIONS and OBJECT_POSE.");
   perception::declare(params);
-  try {
-    if (!params.parse(argc, argv)) return 0;
-    if (params.configPath().empty()) {
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    if (p.configPath().empty()) {
       throw ConfigError(
           "--config FILE is required (it holds the colour classes; see "
           "config/detect_default.yaml)");
     }
-    const std::string where = "config file '" + params.configPath() + "'";
-    perception::DetectorParams dp =
-        perception::DetectorParams::fromConfig(params.section("classes"), where);
-    dp.filter_size_px = params.getInt("filter_size_px");
-    dp.morph_size_px = params.getInt("morph_size_px");
+    perception::DetectorParams dp = perception::DetectorParams::fromConfig(
+        p.section("classes"), "config file '" + p.configPath() + "'");
+    dp.filter_size_px = p.getInt("filter_size_px");
+    dp.morph_size_px = p.getInt("morph_size_px");
     if (dp.filter_size_px < 1 || dp.filter_size_px % 2 == 0 || dp.morph_size_px < 1) {
       throw ConfigError("filter_size_px must be odd and >= 1, morph_size_px >= 1");
     }
-    StereoRig rig = params.getString("rig_file").empty()
-                        ? StereoRig::makeDefault()
-                        : StereoRig::load(params.getString("rig_file"));
-    const std::string url = lcmUrl(params);
-    warnIfReceiveBufferSmall(url);
-    lcm::LCM lcm(url);
-    if (!lcm.good()) {
-      std::fprintf(stderr, "ptz-detect: cannot open LCM at '%s'\n", url.c_str());
-      return 1;
-    }
-    StopFlag::install();
-    perception::DetectNode node(params, &lcm, std::move(rig), std::move(dp));
+    perception::DetectNode node(p, &lcm, rigFromParams(p), std::move(dp));
     return node.run();
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "ptz-detect: %s\n", e.what());
-    return 2;
-  }
+  });
 }

@@ -19,11 +19,6 @@ cv::Moments templateMoments(const std::string& shape) {
   return cv::moments(img, true);
 }
 
-double optional(const cv::FileNode& n, const std::string& field, const std::string& where,
-                double fallback) {
-  return n[field].empty() ? fallback : readDouble(n, field, where);
-}
-
 struct Hsi {
   double hue_deg, saturation, intensity;
 };
@@ -66,15 +61,15 @@ DetectorParams DetectorParams::fromConfig(const cv::FileNode& classes, const std
     c.name = readString(n, "name", w);
     c.hue_min_deg = readDouble(n, "hue_min_deg", w);
     c.hue_max_deg = readDouble(n, "hue_max_deg", w);
-    c.saturation_min = optional(n, "saturation_min", w, c.saturation_min);
-    c.saturation_max = optional(n, "saturation_max", w, c.saturation_max);
-    c.intensity_min = optional(n, "intensity_min", w, c.intensity_min);
-    c.intensity_max = optional(n, "intensity_max", w, c.intensity_max);
+    c.saturation_min = readDouble(n, "saturation_min", w, c.saturation_min);
+    c.saturation_max = readDouble(n, "saturation_max", w, c.saturation_max);
+    c.intensity_min = readDouble(n, "intensity_min", w, c.intensity_min);
+    c.intensity_max = readDouble(n, "intensity_max", w, c.intensity_max);
     c.shape = n["shape"].empty() ? c.shape : readString(n, "shape", w);
-    c.max_shape_distance = optional(n, "max_shape_distance", w, c.max_shape_distance);
-    c.max_elongation = optional(n, "max_elongation", w, c.max_elongation);
-    c.min_area_px2 = optional(n, "min_area_px2", w, c.min_area_px2);
-    c.max_area_px2 = optional(n, "max_area_px2", w, c.max_area_px2);
+    c.max_shape_distance = readDouble(n, "max_shape_distance", w, c.max_shape_distance);
+    c.max_elongation = readDouble(n, "max_elongation", w, c.max_elongation);
+    c.min_area_px2 = readDouble(n, "min_area_px2", w, c.min_area_px2);
+    c.max_area_px2 = readDouble(n, "max_area_px2", w, c.max_area_px2);
     if (c.shape != "circle" && c.shape != "square" && c.shape != "any") {
       throw ConfigError(w + ": field 'shape' must be circle, square or any (got '" + c.shape +
                         "')");

@@ -58,9 +58,7 @@ class SimNode {
         p.configPath().empty() ? "flags" : "config file '" + p.configPath() + "'";
     Scene scene =
         Scene::fromConfig(p.section("scene"), p.section("objects"), p.section("chessboard"), where);
-    StereoRig rig = p.getString("rig_file").empty() ? StereoRig::makeDefault()
-                                                    : StereoRig::load(p.getString("rig_file"));
-    sim_ = std::make_unique<Simulator>(std::move(rig), std::move(scene), plantParamsFrom(p),
+    sim_ = std::make_unique<Simulator>(rigFromParams(p), std::move(scene), plantParamsFrom(p),
                                        p.getDouble("noise_sigma"),
                                        static_cast<unsigned>(p.getInt("seed")));
     lcm_->subscribe(ch_setpoint_, &SimNode::onSetpoint, this);
@@ -238,34 +236,19 @@ int main(int argc, char** argv) {
                 "(PT1 + dead time), publishes PTZ_STATE and SIM_TRUTH, applies "
                 "PTZ_SETPOINT.");
   sim::declare(params);
-  try {
-    if (!params.parse(argc, argv)) return 0;
-    const std::string clock = params.getString("clock");
-    const std::string enc = params.getString("encoding");
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    const std::string clock = p.getString("clock");
+    const std::string enc = p.getString("encoding");
     if (clock != "realtime" && clock != "lockstep") {
       throw ConfigError("parameter 'clock' must be realtime or lockstep, got '" + clock + "'");
     }
     if (enc != "raw" && enc != "jpeg") {
       throw ConfigError("parameter 'encoding' must be raw or jpeg, got '" + enc + "'");
     }
-    if (!(params.getDouble("frame_rate_hz") > 0) || !(params.getDouble("state_rate_hz") > 0)) {
+    if (!(p.getDouble("frame_rate_hz") > 0) || !(p.getDouble("state_rate_hz") > 0)) {
       throw ConfigError("parameters 'frame_rate_hz' and 'state_rate_hz' must be > 0");
     }
-    const std::string url = lcmUrl(params);
-    warnIfReceiveBufferSmall(url);
-    lcm::LCM lcm(url);
-    if (!lcm.good()) {
-      std::fprintf(stderr,
-                   "ptz-sim: cannot open LCM at '%s' (multicast route? see "
-                   "scripts/check-network)\n",
-                   url.c_str());
-      return 1;
-    }
-    StopFlag::install();
-    sim::SimNode node(params, &lcm);
+    sim::SimNode node(p, &lcm);
     return node.run();
-  } catch (const ConfigError& e) {
-    std::fprintf(stderr, "ptz-sim: %s\n", e.what());
-    return 2;
-  }
+  });
 }

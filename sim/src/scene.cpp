@@ -84,11 +84,6 @@ Eigen::Vector3d vec3(const cv::FileNode& n, const std::string& field, const std:
   return {v[0], v[1], v[2]};
 }
 
-double optDouble(const cv::FileNode& n, const std::string& field, const std::string& where,
-                 double fallback) {
-  return n[field].empty() ? fallback : readDouble(n, field, where);
-}
-
 }  // namespace
 
 Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& objects,
@@ -96,9 +91,9 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
   Scene scene;
   if (!scene_node.empty()) {
     const std::string w = where + ", scene";
-    scene.backdrop_distance_m = optDouble(scene_node, "backdrop_distance_m", w, 8.0);
-    scene.floor_height_m = optDouble(scene_node, "floor_height_m", w, 1.4);
-    scene.texture_m_per_texel = optDouble(scene_node, "texture_m_per_texel", w, 0.01);
+    scene.backdrop_distance_m = readDouble(scene_node, "backdrop_distance_m", w, 8.0);
+    scene.floor_height_m = readDouble(scene_node, "floor_height_m", w, 1.4);
+    scene.texture_m_per_texel = readDouble(scene_node, "texture_m_per_texel", w, 0.01);
     if (!scene_node["texture_seed"].empty()) {
       scene.texture_seed = static_cast<unsigned>(readInt(scene_node, "texture_seed", w));
     }
@@ -125,7 +120,7 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
         if ((o.half_extents_m.array() <= 0).any()) {
           throw ConfigError(w + ": field 'half_extents_m' must be three numbers > 0");
         }
-        o.yaw_rad = optDouble(n, "yaw_rad", w, 0.0);
+        o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0);
       } else {
         throw ConfigError(w + ": field 'shape' must be sphere or box (got '" + shape + "')");
       }
@@ -139,8 +134,8 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
           n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
       t.centre_m = vec3(n, "centre_m", w, t.centre_m);
       t.amplitude_m = vec3(n, "amplitude_m", w, t.amplitude_m);
-      t.period_s = optDouble(n, "period_s", w, t.period_s);
-      t.phase_rad = optDouble(n, "phase_rad", w, 0.0);
+      t.period_s = readDouble(n, "period_s", w, t.period_s);
+      t.phase_rad = readDouble(n, "phase_rad", w, 0.0);
       if (!n["seed"].empty()) t.seed = static_cast<unsigned>(readInt(n, "seed", w));
       if (t.period_s <= 0) throw ConfigError(w + ": field 'period_s' must be > 0");
       scene.objects.push_back(o);

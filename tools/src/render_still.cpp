@@ -31,8 +31,7 @@ int main(int argc, char** argv) {
     const std::string where = "config file '" + p.configPath() + "'";
     sim::Scene scene = sim::Scene::fromConfig(p.section("scene"), p.section("objects"),
                                               p.section("chessboard"), where);
-    StereoRig rig = p.getString("rig_file").empty() ? StereoRig::makeDefault()
-                                                    : StereoRig::load(p.getString("rig_file"));
+    const StereoRig rig = rigFromParams(p);
     PtzPlant::Params plant = plantParamsFrom(p);
     for (auto& axis : plant.axis) {  // motors reach the pose at once
       axis.dead_time_s = 0;

@@ -23,6 +23,9 @@ cv::FileStorage openForRead(const std::string& path, const std::string& what);
 // Reads one field of a structured file. `where` names the file and the parent ("rig file
 // 'x.yaml', left"); a missing or mistyped field throws ConfigError naming both.
 double readDouble(const cv::FileNode& parent, const std::string& field, const std::string& where);
+// The same, with a value for a field that is absent.
+double readDouble(const cv::FileNode& parent, const std::string& field, const std::string& where,
+                  double fallback);
 int readInt(const cv::FileNode& parent, const std::string& field, const std::string& where);
 std::string readString(const cv::FileNode& parent, const std::string& field,
                        const std::string& where);
@@ -62,6 +65,7 @@ class Params {
   // A section of the config file (none() when absent).
   cv::FileNode section(const std::string& name) const;
   const std::string& configPath() const { return config_path_; }
+  const std::string& program() const { return program_; }
 
   std::string usage() const;
   // A Markdown table of all parameters (for the folder READMEs).

@@ -92,6 +92,10 @@ class StereoRig {
   static StereoRig makeDefault();
 };
 
+class Params;
+// The rig of the parameter rig_file (declared by the caller), or the default rig when empty.
+StereoRig rigFromParams(const Params& params);
+
 Eigen::Matrix3d rotationY(double angle_rad);
 Eigen::Matrix3d rotationX(double angle_rad);
 

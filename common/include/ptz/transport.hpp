@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -48,6 +49,13 @@ int64_t wallUtime();
 ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality);
 // Decodes to BGR8 (or GRAY8). Returns false and says why for anything inconsistent.
 bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
+
+// The main of every process: parses flags and the config file (--help prints the usage), opens
+// LCM at lcmUrl() (warning when its receive buffer is too small), installs the stop flag and
+// runs body. A ConfigError from any of it ends the process with exit code 2 and the message
+// (file and field named); an LCM that cannot open, with 1.
+int runProcess(int argc, char** argv, Params& params,
+               const std::function<int(const Params&, lcm::LCM&)>& body);
 
 // Set by SIGINT/SIGTERM; processes poll it in their loop.
 class StopFlag {
@@ -97,6 +105,10 @@ class StatusReporter {
   std::map<std::string, ChannelStats> channels_;
   std::map<std::string, int64_t> counters_;
 };
+
+// The loop of a process driven by its input: announces itself ("up and subscribed": tests and
+// scripts wait for that status), handles messages until SIGINT/SIGTERM, publishes a last status.
+int serveUntilStopped(lcm::LCM& lcm, StatusReporter& status);
 
 // Warns on stderr at most once per period per key, with the count since the last warning.
 class RateLimitedLog {
