@@ -46,6 +46,7 @@ RunMetrics::RunMetrics(std::string target_class, double settle_s)
 
 void RunMetrics::onFrame(const ptzstereo::stereo_frame_t& m) {
   ++frames_seen_;
+  frame_publish_utime_[m.seq] = m.publish_utime;
   if (first_utime_ < 0) first_utime_ = m.utime;
   if (last_frame_utime_ >= 0 && frame_period_us_ == 0)
     frame_period_us_ = m.utime - last_frame_utime_;
@@ -95,7 +96,12 @@ void RunMetrics::onPose(const ptzstereo::object_pose_t& m) {
 void RunMetrics::onSetpoint(const ptzstereo::ptz_setpoint_t& m) {
   // Only where utime is wall-clock time (realtime runs): in lockstep it is sim time.
   const double latency_ms = (m.publish_utime - m.utime) / 1000.0;
-  if (latency_ms >= 0 && latency_ms < 60'000) latency_ms_.push_back(latency_ms);
+  if (latency_ms < 0 || latency_ms >= 60'000) return;
+  latency_ms_.push_back(latency_ms);
+  auto it = frame_publish_utime_.find(m.frame_seq);
+  if (it != frame_publish_utime_.end()) {
+    chain_latency_ms_.push_back((m.publish_utime - it->second) / 1000.0);
+  }
 }
 
 void RunMetrics::onStatus(const ptzstereo::process_status_t& m) {
@@ -112,6 +118,8 @@ RunSummary RunMetrics::summary() const {
   s.frames_processed = poses_;
   s.latency_ms_p50 = percentile(latency_ms_, 50);
   s.latency_ms_p99 = percentile(latency_ms_, 99);
+  s.chain_latency_ms_p50 = percentile(chain_latency_ms_, 50);
+  s.chain_latency_ms_p99 = percentile(chain_latency_ms_, 99);
   std::vector<double> radial;
   double max_px = NAN;
   for (const auto& [seq, o] : centering_) {
@@ -139,6 +147,8 @@ std::string RunSummary::toJson() const {
     << "  \"frames_processed\": " << frames_processed << ",\n"
     << "  \"latency_ms_p50\": " << number(latency_ms_p50) << ",\n"
     << "  \"latency_ms_p99\": " << number(latency_ms_p99) << ",\n"
+    << "  \"chain_latency_ms_p50\": " << number(chain_latency_ms_p50) << ",\n"
+    << "  \"chain_latency_ms_p99\": " << number(chain_latency_ms_p99) << ",\n"
     << "  \"centering_rms_px\": " << number(centering_rms_px) << ",\n"
     << "  \"centering_max_px\": " << number(centering_max_px) << ",\n"
     << "  \"frames_target_outside_image\": " << frames_target_outside_image << ",\n"

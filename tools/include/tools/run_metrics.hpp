@@ -21,6 +21,10 @@ struct RunSummary {
   int64_t frames_processed = 0;  // OBJECT_POSE messages
   double latency_ms_p50 = NAN;   // frame capture -> setpoint publish (wall-clock runs only)
   double latency_ms_p99 = NAN;
+  // STEREO_FRAME publish -> setpoint publish: the processing chain without the camera's (or
+  // the simulator's render) delivery time.
+  double chain_latency_ms_p50 = NAN;
+  double chain_latency_ms_p99 = NAN;
   double centering_rms_px = NAN;  // true target to image centre, both cameras, after settle_s
   double centering_max_px = NAN;
   int64_t frames_target_outside_image = 0;  // after settle_s, either camera
@@ -58,7 +62,8 @@ class RunMetrics {
   std::map<int64_t, std::vector<double>> truth_position_;  // seq -> x, y, z
   std::map<int64_t, std::vector<double>> centering_;
   std::vector<double> position_error_m_, position_error_pct_;
-  std::vector<double> latency_ms_;
+  std::vector<double> latency_ms_, chain_latency_ms_;
+  std::map<int64_t, int64_t> frame_publish_utime_;  // seq -> publish_utime
   int64_t poses_ = 0, poses_without_target_ = 0;
   std::map<std::string, int64_t> counters_;  // "process.counter" of the last status
   int64_t outside_ = 0;
