@@ -1,0 +1,184 @@
+// ptz-stability: margins and the largest stable delay of the PT1 + dead-time loop (paper,
+// section 4), continuous and sampled at the frame rate; Bode, Nyquist and step plots (gnuplot).
+#include <sys/stat.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "control/stability.hpp"
+#include "ptz/config.hpp"
+
+namespace {
+
+std::string num(double v) {
+  if (std::isinf(v)) return "null";
+  std::ostringstream s;
+  s.precision(8);
+  s << v;
+  return s.str();
+}
+
+// Writes the data files and a gnuplot script into dir, runs gnuplot; false if it failed.
+bool plot(const std::string& dir, const ptz::control::LoopParams& loop,
+          const ptz::control::ContinuousMargins& m, double tau_max_sampled) {
+  using namespace ptz::control;
+  {
+    std::ofstream f(dir + "/open_loop.dat");
+    f << "# omega_rad_s magnitude_db phase_deg re im\n";
+    for (const auto& p : openLoopResponse(loop, 0.1, 100, 400)) {
+      f << p.omega_rad_s << " " << p.magnitude_db << " " << p.phase_deg << " " << p.re << " "
+        << p.im << "\n";
+    }
+  }
+  {
+    std::ofstream f(dir + "/step.dat");
+    f << "# t_s";
+    const double taus[] = {0.0, 0.5 * m.tau_max_s, 0.9 * m.tau_max_s, 1.1 * m.tau_max_s};
+    std::vector<std::vector<double>> ys;
+    for (double tau : taus) {
+      f << " tau_" << tau;
+      LoopParams l = loop;
+      l.delay_s = std::isfinite(tau) ? tau : 0.0;
+      ys.push_back(continuousStepResponse(l, 6.0, 0.001));
+    }
+    f << "\n";
+    for (size_t k = 0; k <= 6000; k += 5) {
+      f << k * 0.001;
+      for (const auto& y : ys) f << " " << (k < y.size() ? y[k] : NAN);
+      f << "\n";
+    }
+  }
+  std::ofstream g(dir + "/plots.gp");
+  char tau_titles[4][64];
+  const double fractions[4] = {0.0, 0.5, 0.9, 1.1};
+  for (int i = 0; i < 4; ++i) {
+    std::snprintf(tau_titles[i], sizeof(tau_titles[i]), "tau = %.3f s (%.0f %% of tau_max)",
+                  fractions[i] * m.tau_max_s, fractions[i] * 100);
+  }
+  g << "set terminal pngcairo size 900,700 font 'DejaVu Sans,11' noenhanced\n"
+    << "set grid\n"
+    << "set output '" << dir << "/bode.png'\n"
+    << "set multiplot layout 2,1 title 'Open loop G(s) = " << loop.gain << " / (1 + "
+    << loop.time_constant_s << " s) e^{-s " << loop.delay_s << "}'\n"
+    << "set logscale x\nset xlabel 'angular frequency (rad/s)'\nset ylabel 'magnitude (dB)'\n";
+  if (m.has_crossover) {
+    g << "set arrow from " << m.crossover_rad_s << ", graph 0 to " << m.crossover_rad_s
+      << ", graph 1 nohead dt 2 lc rgb 'red'\n"
+      << "set label sprintf('omega_g = %.3f rad/s', " << m.crossover_rad_s << ") at " << m.crossover_rad_s
+      << ", graph 0.9 offset 1,0 tc rgb 'red'\n";
+  }
+  g << "plot '" << dir << "/open_loop.dat' using 1:2 with lines lw 2 title '|G(j omega)|', 0 "
+    << "title '0 dB' dt 3 lc rgb 'gray'\n"
+    << "set ylabel 'phase (deg)'\n"
+    << "set label sprintf('phase margin %.1f deg', " << m.phase_margin_at_delay_deg
+    << ") at graph 0.05, graph 0.15\n"
+    << "plot '" << dir << "/open_loop.dat' using 1:3 with lines lw 2 title 'arg G(j omega)', -180 "
+    << "title '-180 deg' dt 3 lc rgb 'gray'\n"
+    << "unset multiplot\nunset arrow\nunset label\nunset logscale x\n"
+    << "set output '" << dir << "/nyquist.png'\n"
+    << "set title sprintf('Nyquist plot, tau = %.3f s (tau_max %.3f s continuous, %.3f s "
+    << "sampled)', " << loop.delay_s << ", " << m.tau_max_s << ", " << tau_max_sampled << ")\n"
+    << "set xlabel 'Re G(j omega)'\nset ylabel 'Im G(j omega)'\nset size ratio -1\n"
+    << "set xrange [-2:2]\nset yrange [-2:2]\nset parametric\nset trange [0:2*pi]\n"
+    << "set label 'critical point -1' at -1,0 point pt 7 lc rgb 'red' offset 1,1\n"
+    << "plot '" << dir << "/open_loop.dat' using 4:5 with lines lw 2 title 'G(j omega), omega > 0', "
+    << "cos(t), sin(t) dt 3 lc rgb 'gray' title 'unit circle'\n"
+    << "unset parametric\nunset label\nset size noratio\nset autoscale\n"
+    << "set output '" << dir << "/step.png'\n"
+    << "set title 'Closed-loop step response (unity feedback), continuous'\n"
+    << "set xlabel 'time (s)'\nset ylabel 'output / reference step'\nset yrange [-0.5:2.5]\n"
+    << "plot '" << dir << "/step.dat' using 1:2 with lines lw 2 title '" << tau_titles[0] << "', "
+    << "'' using 1:3 with lines lw 2 title '" << tau_titles[1] << "', "
+    << "'' using 1:4 with lines lw 2 title '" << tau_titles[2] << "', "
+    << "'' using 1:5 with lines lw 2 title '" << tau_titles[3] << "'\n";
+  g.close();
+  return std::system(("gnuplot '" + dir + "/plots.gp'").c_str()) == 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params p("ptz-stability",
+           "Stability of one axis of the active vision loop: the open loop K / (1 + T s) "
+           "e^(-s tau) with unity feedback (paper, eq. 9-14): gain crossover, phase and gain "
+           "margins, the largest stable delay tau_max, continuous and sampled at the frame rate.");
+  p.add("gain", 1.7, "", "open-loop gain K (controller P times motor gain)");
+  p.add("time_constant_s", 0.24, "s", "motor time constant T");
+  p.add("delay_s", 0.0, "s", "delay tau (image processing, transport)");
+  p.add("frame_rate_hz", 30.0, "Hz", "frame rate of the sampled loop (0: continuous only)");
+  p.add("json", "", "also write every figure as JSON to this file");
+  p.add("plots", "", "folder for bode.png, nyquist.png, step.png (gnuplot)");
+  try {
+    if (!p.parse(argc, argv)) return 0;
+    control::LoopParams loop{p.getDouble("gain"), p.getDouble("time_constant_s"),
+                             p.getDouble("delay_s")};
+    if (!(loop.time_constant_s > 0) || loop.delay_s < 0 || p.getDouble("frame_rate_hz") < 0) {
+      throw ConfigError("need time_constant_s > 0, delay_s >= 0, frame_rate_hz >= 0");
+    }
+    const auto m = control::continuousMargins(loop);
+    const double fps = p.getDouble("frame_rate_hz");
+    const double tau_sampled = fps > 0 ? control::sampledTauMax(loop, fps) : NAN;
+    const auto sampled = fps > 0 ? control::sampledStability(loop, fps) : control::SampledResult{};
+    std::printf("open loop G(s) = %g / (1 + %g s) * exp(-s * %g)\n", loop.gain,
+                loop.time_constant_s, loop.delay_s);
+    if (!m.has_crossover) {
+      std::printf("|K| <= 1: |G(j w)| < 1 at every frequency, no gain crossover: the continuous "
+                  "loop is stable for every delay\n");
+    } else {
+      std::printf("gain crossover      omega_g = %.3f rad/s\n", m.crossover_rad_s);
+      std::printf("phase margin        %.1f deg without delay, %.1f deg at tau = %g s\n",
+                  m.phase_margin_deg, m.phase_margin_at_delay_deg, loop.delay_s);
+      std::printf("largest delay       tau_max = %.3f s (continuous)\n", m.tau_max_s);
+    }
+    if (loop.delay_s > 0) {
+      std::printf("gain margin         %.2f dB at %.3f rad/s\n", m.gain_margin_db,
+                  m.phase_crossover_rad_s);
+    }
+    if (fps > 0) {
+      std::printf("sampled at %g Hz    tau_max = %.3f s; at tau = %g s the largest pole is %.4f "
+                  "(%s)\n",
+                  fps, tau_sampled, loop.delay_s, sampled.spectral_radius,
+                  sampled.stable ? "stable" : "unstable");
+    }
+    std::printf("at tau = %g s the continuous loop is %s\n", loop.delay_s,
+                m.stable ? "stable" : "unstable");
+    const std::string json = p.getString("json");
+    if (!json.empty()) {
+      std::ofstream f(json);
+      f << "{\n  \"gain\": " << num(loop.gain) << ",\n  \"time_constant_s\": "
+        << num(loop.time_constant_s) << ",\n  \"delay_s\": " << num(loop.delay_s)
+        << ",\n  \"has_crossover\": " << (m.has_crossover ? "true" : "false")
+        << ",\n  \"crossover_rad_s\": " << num(m.crossover_rad_s)
+        << ",\n  \"phase_margin_deg\": " << num(m.phase_margin_deg)
+        << ",\n  \"phase_margin_at_delay_deg\": " << num(m.phase_margin_at_delay_deg)
+        << ",\n  \"gain_margin_db\": " << num(m.gain_margin_db)
+        << ",\n  \"tau_max_s\": " << num(m.tau_max_s)
+        << ",\n  \"stable\": " << (m.stable ? "true" : "false")
+        << ",\n  \"frame_rate_hz\": " << num(fps)
+        << ",\n  \"sampled_tau_max_s\": " << (fps > 0 ? num(tau_sampled) : "null")
+        << ",\n  \"sampled_spectral_radius\": " << (fps > 0 ? num(sampled.spectral_radius) : "null")
+        << ",\n  \"sampled_stable\": " << (fps > 0 ? (sampled.stable ? "true" : "false") : "null")
+        << "\n}\n";
+      if (!f) throw ConfigError("cannot write '" + json + "'");
+    }
+    const std::string dir = p.getString("plots");
+    if (!dir.empty()) {
+      ::mkdir(dir.c_str(), 0755);
+      if (!plot(dir, loop, m, tau_sampled)) {
+        std::fprintf(stderr, "ptz-stability: gnuplot failed (is gnuplot installed?)\n");
+        return 1;
+      }
+      std::printf("plots: %s/bode.png %s/nyquist.png %s/step.png\n", dir.c_str(), dir.c_str(),
+                  dir.c_str());
+    }
+    return 0;
+  } catch (const ConfigError& e) {
+    std::fprintf(stderr, "ptz-stability: %s\n", e.what());
+    return 2;
+  }
+}
