@@ -76,8 +76,8 @@ TEST(Stability, ContinuousTauMaxIsTheSimulatedBoundaryWithinOnePercent) {
       l.delay_s = tau;
       return ptz::control::continuousLoopDecays(l);
     });
-    EXPECT_NEAR(simulated, predicted, 0.01 * predicted) << "K " << base.gain << " T "
-                                                        << base.time_constant_s;
+    EXPECT_NEAR(simulated, predicted, 0.01 * predicted)
+        << "K " << base.gain << " T " << base.time_constant_s;
   }
 }
 

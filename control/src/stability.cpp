@@ -118,7 +118,8 @@ std::vector<double> continuousStepResponse(const LoopParams& loop, double durati
     const double u_delayed = line.front();
     line.pop_front();
     y[static_cast<size_t>(k) + 1] = a * y[static_cast<size_t>(k)] + loop.gain * (1 - a) * u_delayed;
-    if (!std::isfinite(y[static_cast<size_t>(k) + 1]) || std::abs(y[static_cast<size_t>(k) + 1]) > 1e9) {
+    if (!std::isfinite(y[static_cast<size_t>(k) + 1]) ||
+        std::abs(y[static_cast<size_t>(k) + 1]) > 1e9) {
       y.resize(static_cast<size_t>(k) + 2);
       break;
     }
@@ -136,7 +137,8 @@ bool continuousLoopDecays(const LoopParams& loop) {
   // Compare the error envelope in the second and the last quarter of the run.
   auto envelope = [&](size_t from, size_t to) {
     double m = 0;
-    for (size_t i = from; i < to && i < y.size(); ++i) m = std::max(m, std::abs(y[i] - final_value));
+    for (size_t i = from; i < to && i < y.size(); ++i)
+      m = std::max(m, std::abs(y[i] - final_value));
     return m;
   };
   const size_t n = y.size();

@@ -68,8 +68,8 @@ bool plot(const std::string& dir, const ptz::control::LoopParams& loop,
   if (m.has_crossover) {
     g << "set arrow from " << m.crossover_rad_s << ", graph 0 to " << m.crossover_rad_s
       << ", graph 1 nohead dt 2 lc rgb 'red'\n"
-      << "set label sprintf('omega_g = %.3f rad/s', " << m.crossover_rad_s << ") at " << m.crossover_rad_s
-      << ", graph 0.9 offset 1,0 tc rgb 'red'\n";
+      << "set label sprintf('omega_g = %.3f rad/s', " << m.crossover_rad_s << ") at "
+      << m.crossover_rad_s << ", graph 0.9 offset 1,0 tc rgb 'red'\n";
   }
   g << "plot '" << dir << "/open_loop.dat' using 1:2 with lines lw 2 title '|G(j omega)|', 0 "
     << "title '0 dB' dt 3 lc rgb 'gray'\n"
@@ -85,7 +85,8 @@ bool plot(const std::string& dir, const ptz::control::LoopParams& loop,
     << "set xlabel 'Re G(j omega)'\nset ylabel 'Im G(j omega)'\nset size ratio -1\n"
     << "set xrange [-2:2]\nset yrange [-2:2]\nset parametric\nset trange [0:2*pi]\n"
     << "set label 'critical point -1' at -1,0 point pt 7 lc rgb 'red' offset 1,1\n"
-    << "plot '" << dir << "/open_loop.dat' using 4:5 with lines lw 2 title 'G(j omega), omega > 0', "
+    << "plot '" << dir
+    << "/open_loop.dat' using 4:5 with lines lw 2 title 'G(j omega), omega > 0', "
     << "cos(t), sin(t) dt 3 lc rgb 'gray' title 'unit circle'\n"
     << "unset parametric\nunset label\nset size noratio\nset autoscale\n"
     << "set output '" << dir << "/step.png'\n"
@@ -127,8 +128,9 @@ int main(int argc, char** argv) {
     std::printf("open loop G(s) = %g / (1 + %g s) * exp(-s * %g)\n", loop.gain,
                 loop.time_constant_s, loop.delay_s);
     if (!m.has_crossover) {
-      std::printf("|K| <= 1: |G(j w)| < 1 at every frequency, no gain crossover: the continuous "
-                  "loop is stable for every delay\n");
+      std::printf(
+          "|K| <= 1: |G(j w)| < 1 at every frequency, no gain crossover: the continuous "
+          "loop is stable for every delay\n");
     } else {
       std::printf("gain crossover      omega_g = %.3f rad/s\n", m.crossover_rad_s);
       std::printf("phase margin        %.1f deg without delay, %.1f deg at tau = %g s\n",
@@ -140,18 +142,20 @@ int main(int argc, char** argv) {
                   m.phase_crossover_rad_s);
     }
     if (fps > 0) {
-      std::printf("sampled at %g Hz    tau_max = %.3f s; at tau = %g s the largest pole is %.4f "
-                  "(%s)\n",
-                  fps, tau_sampled, loop.delay_s, sampled.spectral_radius,
-                  sampled.stable ? "stable" : "unstable");
+      std::printf(
+          "sampled at %g Hz    tau_max = %.3f s; at tau = %g s the largest pole is %.4f "
+          "(%s)\n",
+          fps, tau_sampled, loop.delay_s, sampled.spectral_radius,
+          sampled.stable ? "stable" : "unstable");
     }
     std::printf("at tau = %g s the continuous loop is %s\n", loop.delay_s,
                 m.stable ? "stable" : "unstable");
     const std::string json = p.getString("json");
     if (!json.empty()) {
       std::ofstream f(json);
-      f << "{\n  \"gain\": " << num(loop.gain) << ",\n  \"time_constant_s\": "
-        << num(loop.time_constant_s) << ",\n  \"delay_s\": " << num(loop.delay_s)
+      f << "{\n  \"gain\": " << num(loop.gain)
+        << ",\n  \"time_constant_s\": " << num(loop.time_constant_s)
+        << ",\n  \"delay_s\": " << num(loop.delay_s)
         << ",\n  \"has_crossover\": " << (m.has_crossover ? "true" : "false")
         << ",\n  \"crossover_rad_s\": " << num(m.crossover_rad_s)
         << ",\n  \"phase_margin_deg\": " << num(m.phase_margin_deg)

@@ -9,20 +9,20 @@
 namespace ptz::control {
 
 struct LoopParams {
-  double gain = 1.7;             // K: the open-loop gain (controller times motor)
+  double gain = 1.7;              // K: the open-loop gain (controller times motor)
   double time_constant_s = 0.24;  // T
-  double delay_s = 0.0;          // tau
+  double delay_s = 0.0;           // tau
 };
 
 struct ContinuousMargins {
-  bool has_crossover = false;      // K <= 1: |G| < 1 at every frequency, no crossover
-  double crossover_rad_s = 0;      // omega_g, |G*(j omega_g)| = 1 (eq. 10)
-  double phase_margin_deg = 0;     // without delay (eq. 11)
+  bool has_crossover = false;            // K <= 1: |G| < 1 at every frequency, no crossover
+  double crossover_rad_s = 0;            // omega_g, |G*(j omega_g)| = 1 (eq. 10)
+  double phase_margin_deg = 0;           // without delay (eq. 11)
   double phase_margin_at_delay_deg = 0;  // eq. 12
-  double tau_max_s = 0;            // eq. 14 (infinite without a crossover)
-  double gain_margin_db = 0;       // at the delay: -20 log10 |G| where the phase is -180 deg
-  double phase_crossover_rad_s = 0;  // where that is (0: none, tau = 0)
-  bool stable = true;              // at the delay
+  double tau_max_s = 0;                  // eq. 14 (infinite without a crossover)
+  double gain_margin_db = 0;             // at the delay: -20 log10 |G| where the phase is -180 deg
+  double phase_crossover_rad_s = 0;      // where that is (0: none, tau = 0)
+  bool stable = true;                    // at the delay
 };
 
 ContinuousMargins continuousMargins(const LoopParams& loop);
