@@ -44,9 +44,9 @@ std::string scenario() {
   const auto pos = text.find(from);
   EXPECT_NE(pos, std::string::npos) << "config/sim_paper.yaml changed its ball";
   if (pos != std::string::npos) {
-    text.replace(pos, from.size(), "centre_m: [" + std::to_string(kBall.x()) + ", " +
-                                       std::to_string(kBall.y()) + ", " +
-                                       std::to_string(kBall.z()) + "]");
+    text.replace(pos, from.size(),
+                 "centre_m: [" + std::to_string(kBall.x()) + ", " + std::to_string(kBall.y()) +
+                     ", " + std::to_string(kBall.z()) + "]");
   }
   const std::string path = std::string(::testing::TempDir()) + "/sweep_paper.yaml";
   std::ofstream(path) << text;
@@ -63,13 +63,14 @@ std::pair<double, double> runPaperLoop(double tau_s, double fps, double duration
                        PTZ_SOURCE_DIR "/config/detect_default.yaml"});
   ChildProcess control({PTZ_CONTROL_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                         PTZ_SOURCE_DIR "/config/control_paper.yaml"});
-  ptz::test::handleUntil(lcm, [&] { return r.up["ptz-detect"] && r.up["ptz-control"]; }, 20s);
+  ptz::test::handleUntil(
+      lcm, [&] { return r.up["ptz-detect"] && r.up["ptz-control"]; }, 20s);
   const int frames = static_cast<int>(duration_s * fps);
   ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config", scenario(),
-                    "--dead-time-s",
-                    std::to_string(tau_s), "--frame-rate-hz", std::to_string(fps), "--frames",
-                    std::to_string(frames), "--lockstep-timeout-ms", "3000"});
-  ptz::test::handleUntil(lcm, [&] { return sim.wait(0ms) >= 0; }, 180s);
+                    "--dead-time-s", std::to_string(tau_s), "--frame-rate-hz", std::to_string(fps),
+                    "--frames", std::to_string(frames), "--lockstep-timeout-ms", "3000"});
+  ptz::test::handleUntil(
+      lcm, [&] { return sim.wait(0ms) >= 0; }, 180s);
   ptz::test::drain(lcm, 300ms);
   EXPECT_EQ(static_cast<int>(r.pan.size()), frames);
   const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
@@ -84,8 +85,7 @@ std::pair<double, double> runPaperLoop(double tau_s, double fps, double duration
     }
     return m;
   };
-  return {envelope(0.25 * duration_s, 0.5 * duration_s),
-          envelope(0.75 * duration_s, duration_s)};
+  return {envelope(0.25 * duration_s, 0.5 * duration_s), envelope(0.75 * duration_s, duration_s)};
 }
 
 }  // namespace
@@ -95,9 +95,10 @@ TEST(StabilitySweep, TheRealLoopTurnsUnstableWhereTheSampledAnalysisSays) {
     const double tau_max = ptz::control::sampledTauMax({1.7, 0.24, 0.0}, fps);
     const auto inside = runPaperLoop(0.97 * tau_max, fps, 8.0);
     const auto outside = runPaperLoop(1.03 * tau_max, fps, 8.0);
-    std::printf("%g Hz: tau_max %.4f s; at 97 %%: envelope %.4f -> %.4f rad; at 103 %%: %.4f -> "
-                "%.4f rad\n",
-                fps, tau_max, inside.first, inside.second, outside.first, outside.second);
+    std::printf(
+        "%g Hz: tau_max %.4f s; at 97 %%: envelope %.4f -> %.4f rad; at 103 %%: %.4f -> "
+        "%.4f rad\n",
+        fps, tau_max, inside.first, inside.second, outside.first, outside.second);
     EXPECT_LT(inside.second, inside.first) << fps << " Hz, 3 % below tau_max";
     EXPECT_GT(outside.second, outside.first) << fps << " Hz, 3 % above tau_max";
   }

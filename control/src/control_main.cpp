@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "control/controller.hpp"
+#include "control/delay_monitor.hpp"
 #include "ptz/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
@@ -30,6 +31,8 @@ void declare(Params& p) {
   p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)");
   p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored");
   p.add("max_range_m", d.max_range_m, "m", "farther targets are implausible and ignored");
+  p.add("min_phase_margin_deg", 30.0, "deg",
+        "warn when the measured delay leaves the paper's loop less phase margin");
 }
 
 ControllerParams controllerParams(const Params& p) {
@@ -72,6 +75,10 @@ class ControlNode {
       : lcm_(lcm),
         status_(lcm, p, "ptz-control"),
         controller_(std::move(rig), controllerParams(p)),
+        // The paper's loop model of the pan axis: P gain times motor gain, the motor's T.
+        delay_monitor_({p.getDouble("paper_gain") * p.getDouble("pan_gain"),
+                        p.getDouble("pan_time_constant_s"), 0.0},
+                       p.getDouble("dead_time_s"), p.getDouble("min_phase_margin_deg")),
         ch_pose_(channel(p, channels::kObjectPose)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
@@ -117,12 +124,33 @@ class ControlNode {
     lcm_->publish(ch_setpoint_, &out);
     status_.countOut(ch_setpoint_, (out.publish_utime - m->utime) / 1000.0);
     status_.increment(controller_.tracking() ? "setpoints_tracking" : "setpoints_without_target");
+    monitorDelay((out.publish_utime - m->utime) * 1e-6);
+  }
+
+  // Every 30 setpoints: the delay distribution and the phase margin it leaves, in the status.
+  void monitorDelay(double delay_s) {
+    delay_monitor_.add(delay_s);
+    if (delay_monitor_.samples() < 30) return;
+    const DelayMonitor::Report r = delay_monitor_.report();
+    status_.setCounter("delay_us_p50", std::llround(r.delay_ms_p50 * 1000));
+    status_.setCounter("delay_us_p99", std::llround(r.delay_ms_p99 * 1000));
+    status_.setCounter("phase_margin_millideg", std::llround(r.phase_margin_deg * 1000));
+    if (r.below_threshold) {
+      const std::string msg = "delay p99 " + std::to_string(r.delay_ms_p99) +
+                              " ms leaves a phase margin of " + std::to_string(r.phase_margin_deg) +
+                              " deg";
+      status_.setState(ptzstereo::process_status_t::STATE_WARN, msg);
+      log_.warn("margin", "ptz-control: " + msg);
+    } else {
+      status_.setState(ptzstereo::process_status_t::STATE_OK, "");
+    }
   }
 
   lcm::LCM* lcm_;
   StatusReporter status_;
   RateLimitedLog log_;
   Controller controller_;
+  DelayMonitor delay_monitor_;
   std::string ch_pose_, ch_state_, ch_setpoint_;
 };
 

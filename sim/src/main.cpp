@@ -111,6 +111,9 @@ class SimNode {
     for (;;) {
       const double now = realtimeNow();
       if (now >= t_frame) {
+        // Setpoints that arrived meanwhile act now, even when the frames run late.
+        while (lcm_->handleTimeout(0) > 0) {
+        }
         if (now - t_frame > frame_period_s_) {
           status_.increment("frames_skipped_late");
           return false;

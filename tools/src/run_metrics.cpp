@@ -120,6 +120,10 @@ RunSummary RunMetrics::summary() const {
   s.latency_ms_p99 = percentile(latency_ms_, 99);
   s.chain_latency_ms_p50 = percentile(chain_latency_ms_, 50);
   s.chain_latency_ms_p99 = percentile(chain_latency_ms_, 99);
+  if (counters_.count("ptz-control.delay_us_p99")) {
+    s.delay_ms_p99 = counters_.at("ptz-control.delay_us_p99") / 1000.0;
+    s.phase_margin_deg = counters_.at("ptz-control.phase_margin_millideg") / 1000.0;
+  }
   std::vector<double> radial;
   double max_px = NAN;
   for (const auto& [seq, o] : centering_) {
@@ -149,6 +153,8 @@ std::string RunSummary::toJson() const {
     << "  \"latency_ms_p99\": " << number(latency_ms_p99) << ",\n"
     << "  \"chain_latency_ms_p50\": " << number(chain_latency_ms_p50) << ",\n"
     << "  \"chain_latency_ms_p99\": " << number(chain_latency_ms_p99) << ",\n"
+    << "  \"delay_ms_p99\": " << number(delay_ms_p99) << ",\n"
+    << "  \"phase_margin_deg\": " << number(phase_margin_deg) << ",\n"
     << "  \"centering_rms_px\": " << number(centering_rms_px) << ",\n"
     << "  \"centering_max_px\": " << number(centering_max_px) << ",\n"
     << "  \"frames_target_outside_image\": " << frames_target_outside_image << ",\n"

@@ -25,6 +25,10 @@ struct RunSummary {
   // the simulator's render) delivery time.
   double chain_latency_ms_p50 = NAN;
   double chain_latency_ms_p99 = NAN;
+  // ptz-control's live delay monitor (last report): capture -> setpoint plus the plant's dead
+  // time, and the phase margin it leaves to the paper's loop model.
+  double delay_ms_p99 = NAN;
+  double phase_margin_deg = NAN;
   double centering_rms_px = NAN;  // true target to image centre, both cameras, after settle_s
   double centering_max_px = NAN;
   int64_t frames_target_outside_image = 0;  // after settle_s, either camera
