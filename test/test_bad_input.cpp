@@ -2,6 +2,7 @@
 // private network namespace), fed by this test.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -109,6 +110,16 @@ TEST(BadInput, DetectDropsBadFramesCountsThemAndKeepsRunning) {
   EXPECT_EQ(out.counters["ptz-detect"]["dropped_bad_image"], 3);
   EXPECT_EQ(out.counters["ptz-detect"]["dropped_size_mismatch"], 1);
 
+  // A message that does not decode: the left image's data_size (after the fingerprint, utime,
+  // publish_utime, seq and the image's 4+4+4+1+1+8+8+8 header bytes) says -1.
+  std::vector<uint8_t> bytes(static_cast<size_t>(good.getEncodedSize()));
+  good.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::fill_n(bytes.begin() + 32 + 38, 4, 0xFF);
+  lcm.publish("STEREO_FRAME", bytes.data(), static_cast<unsigned>(bytes.size()));
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return out.counters["ptz-detect"]["dropped_undecodable"] == 1; }, 10s))
+      << "a malformed message was not counted (or took the process down)";
+
   ptzstereo::stereo_frame_t again = good;
   again.seq = 6;
   lcm.publish("STEREO_FRAME", &again);
@@ -164,6 +175,15 @@ TEST(BadInput, ControlNeverTurnsABadPoseIntoASetpoint) {
         },
         10s));
   }
+  // A message that does not decode: num_objects (after 8 + 8 + 8 + 8 + 24 + 24 + 4 bytes) says -1.
+  const auto good = pose(7, 0.3, 0.0, 3.0);
+  std::vector<uint8_t> bytes(static_cast<size_t>(good.getEncodedSize()));
+  good.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  std::fill_n(bytes.begin() + 84, 4, 0xFF);
+  lcm.publish("OBJECT_POSE", bytes.data(), static_cast<unsigned>(bytes.size()));
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return out.counters["ptz-control"]["dropped_undecodable"] == 1; }, 10s))
+      << "a malformed message was not counted (or took the process down)";
   ASSERT_EQ(out.setpoints.size(), 5u);  // one per pose, but none for the corrupt camera pose
   for (const auto& s : out.setpoints) {
     for (double v : {s.left.pan_rad, s.left.tilt_rad, s.left.zoom, s.right.pan_rad,
@@ -179,6 +199,7 @@ TEST(BadInput, ControlNeverTurnsABadPoseIntoASetpoint) {
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return out.counters["ptz-control"]["implausible_poses"] == 3; }, 5s));
   EXPECT_EQ(out.counters["ptz-control"]["dropped_nonfinite_ptz"], 1);
+  EXPECT_EQ(control.stop(), 0);  // still alive, and stops cleanly
 }
 
 namespace {

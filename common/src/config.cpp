@@ -1,6 +1,7 @@
 #include "ptz/config.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -165,8 +166,9 @@ void Params::setFrom(const std::string& raw_name, const std::string& value,
   char* end = nullptr;
   switch (e.type) {
     case Type::kDouble: {
+      errno = 0;
       double d = std::strtod(v.c_str(), &end);
-      if (v.empty() || *end != '\0' || !std::isfinite(d)) {
+      if (v.empty() || *end != '\0' || !std::isfinite(d) || errno == ERANGE) {
         throw ConfigError(source + ": parameter '" + name + "' must be a finite number, got '" + v +
                           "'");
       }

@@ -46,7 +46,7 @@ Eigen::Vector2d CameraView::project(const Eigen::Vector3d& p_head) const {
 }
 
 Intrinsics CameraSpec::intrinsicsAt(double zoom) const {
-  if (zoom <= zoom_table.front().zoom) return zoom_table.front().intrinsics;
+  if (!std::isfinite(zoom) || zoom <= zoom_table.front().zoom) return zoom_table.front().intrinsics;
   if (zoom >= zoom_table.back().zoom) return zoom_table.back().intrinsics;
   auto hi = std::upper_bound(zoom_table.begin(), zoom_table.end(), zoom,
                              [](double z, const ZoomEntry& e) { return z < e.zoom; });

@@ -168,6 +168,9 @@ int runProcess(int argc, char** argv, Params& params,
   } catch (const ConfigError& e) {
     std::fprintf(stderr, "%s: %s\n", name, e.what());
     return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: stopped: %s\n", name, e.what());
+    return 3;
   }
 }
 

@@ -2,6 +2,7 @@
 // carrying the utime and seq of the frame it answers (lockstep and latency use them).
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <optional>
 
 #include "control/controller.hpp"
@@ -82,18 +83,19 @@ class ControlNode {
         ch_pose_(channel(p, channels::kObjectPose)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
-    lcm_->subscribe(ch_pose_, &ControlNode::onPose, this)->setQueueCapacity(1);
-    lcm_->subscribe(ch_state_, &ControlNode::onState, this)->setQueueCapacity(1);
+    poses_ = std::make_unique<SafeSubscription<ptzstereo::object_pose_t>>(
+        *lcm_, ch_pose_, status_,
+        [this](const std::string& ch, const ptzstereo::object_pose_t& m) { onPose(ch, &m); }, 1);
+    states_ = std::make_unique<SafeSubscription<ptzstereo::ptz_state_t>>(
+        *lcm_, ch_state_, status_,
+        [this](const std::string& ch, const ptzstereo::ptz_state_t&) { status_.countIn(ch, -1); },
+        1);
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
-  void onState(const lcm::ReceiveBuffer*, const std::string& ch, const ptzstereo::ptz_state_t*) {
-    status_.countIn(ch, -1);
-  }
-
-  void onPose(const lcm::ReceiveBuffer*, const std::string& ch, const ptzstereo::object_pose_t* m) {
+  void onPose(const std::string& ch, const ptzstereo::object_pose_t* m) {
     status_.countIn(ch, (wallUtime() - m->utime) / 1000.0);
     if (!finitePose(m->left_ptz) || !finitePose(m->right_ptz)) {
       status_.countDropped(ch, "nonfinite_ptz");
@@ -152,6 +154,8 @@ class ControlNode {
   Controller controller_;
   DelayMonitor delay_monitor_;
   std::string ch_pose_, ch_state_, ch_setpoint_;
+  std::unique_ptr<SafeSubscription<ptzstereo::object_pose_t>> poses_;
+  std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;
 };
 
 }  // namespace

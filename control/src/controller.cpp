@@ -77,6 +77,13 @@ void Controller::slewTowards(const std::array<PtzPose, 2>& goal, double dt, doub
 std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observation>& target,
                                           const PtzPose& left_at_capture,
                                           const PtzPose& right_at_capture) {
+  if (last_t_s_ && t_s < *last_t_s_) {
+    // Time went back (a restarted simulator, realtime to lockstep): start afresh.
+    last_t_s_.reset();
+    last_seen_t_s_.reset();
+    tracking_ = false;
+    rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  }
   if (!last_t_s_) {
     setpoint_ = {left_at_capture, right_at_capture};  // start where the heads are
   }

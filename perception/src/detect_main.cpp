@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "perception/detector.hpp"
 #include "perception/stereo.hpp"
@@ -64,8 +65,10 @@ class DetectNode {
     stereo_.pixel_sigma_px = p.getDouble("pixel_sigma_px");
     stereo_.min_range_m = p.getDouble("min_range_m");
     stereo_.max_range_m = p.getDouble("max_range_m");
-    lcm::Subscription* sub = lcm_->subscribe(ch_frame_, &DetectNode::onFrame, this);
-    sub->setQueueCapacity(1);  // always the newest frame, never a backlog
+    // Always the newest frame, never a backlog: a queue of one.
+    frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
+        *lcm_, ch_frame_, status_,
+        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(&m); }, 1);
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
@@ -99,7 +102,7 @@ class DetectNode {
     log_.warn(reason, "ptz-detect: dropped " + message);
   }
 
-  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::stereo_frame_t* m) {
+  void onFrame(const ptzstereo::stereo_frame_t* m) {
     const int64_t received = wallUtime();
     status_.countIn(ch_frame_, (received - m->utime) / 1000.0);
     cv::Mat left, right;
@@ -181,6 +184,7 @@ class DetectNode {
   std::string target_class_;
   std::string ch_frame_, ch_detections_, ch_pose_;
   std::vector<double> processing_ms_;
+  std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
 };
 
 }  // namespace

@@ -124,6 +124,7 @@ bool Detector::inClass(const ColorClass& c, uchar b, uchar g, uchar r) {
 }
 
 void Detector::label(const cv::Mat& bgr, cv::Mat* labels) const {
+  CV_Assert(bgr.type() == CV_8UC3);
   labels->create(bgr.size(), CV_8U);
   const uint8_t* table = class_table_.data();
   for (int r = 0; r < bgr.rows; ++r) {

@@ -61,7 +61,9 @@ class SimNode {
     sim_ = std::make_unique<Simulator>(rigFromParams(p), std::move(scene), plantParamsFrom(p),
                                        p.getDouble("noise_sigma"),
                                        static_cast<unsigned>(p.getInt("seed")));
-    lcm_->subscribe(ch_setpoint_, &SimNode::onSetpoint, this);
+    setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
+        *lcm_, ch_setpoint_, status_,
+        [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); });
     start_wall_utime_ = wallUtime();
     start_steady_ = std::chrono::steady_clock::now();
   }
@@ -176,8 +178,8 @@ class SimNode {
     awaiting_seq_ = -1;
   }
 
-  void onSetpoint(const lcm::ReceiveBuffer*, const std::string& ch,
-                  const ptzstereo::ptz_setpoint_t* msg) {
+  void onSetpoint(const std::string& ch, const ptzstereo::ptz_setpoint_t& m) {
+    const ptzstereo::ptz_setpoint_t* msg = &m;
     double t_apply;
     if (lockstep_) {
       if (msg->frame_seq >= 0 && msg->frame_seq != awaiting_seq_) {
@@ -220,6 +222,7 @@ class SimNode {
   int8_t encoding_;
   std::string ch_frame_, ch_state_, ch_truth_, ch_setpoint_;
   std::unique_ptr<Simulator> sim_;
+  std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
   int64_t start_wall_utime_ = 0;
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;
@@ -248,8 +251,11 @@ int main(int argc, char** argv) {
     if (enc != "raw" && enc != "jpeg") {
       throw ConfigError("parameter 'encoding' must be raw or jpeg, got '" + enc + "'");
     }
-    if (!(p.getDouble("frame_rate_hz") > 0) || !(p.getDouble("state_rate_hz") > 0)) {
-      throw ConfigError("parameters 'frame_rate_hz' and 'state_rate_hz' must be > 0");
+    const double fps = p.getDouble("frame_rate_hz"), state_hz = p.getDouble("state_rate_hz");
+    if (!(fps >= 0.1 && fps <= 1000) || !(state_hz >= 1 && state_hz <= 10000)) {
+      throw ConfigError(
+          "parameters 'frame_rate_hz' (0.1..1000) and 'state_rate_hz' (1..10000) "
+          "are out of range");
     }
     sim::SimNode node(p, &lcm);
     return node.run();

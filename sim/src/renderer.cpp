@@ -163,7 +163,9 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr) {
   // so truncation is floor and the mask wraps.
   constexpr double kOffset = 4096.0 * kTextureSize * kSub + 0.5;
   auto fixed = [&](float metres) {
-    return static_cast<int64_t>(metres * scale + kOffset) & kWrapMask;
+    // Rays that graze the floor meet it very far out: clamp before the cast can overflow.
+    const double m = std::clamp(static_cast<double>(metres), -1e6, 1e6);
+    return static_cast<int64_t>(m * scale + kOffset) & kWrapMask;
   };
   const short floor_row = kTextureSize + 1;  // the floor's half of the atlas
   for (int v = 0; v < view.height; ++v) {

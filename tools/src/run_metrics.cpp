@@ -55,6 +55,10 @@ void RunMetrics::onFrame(const ptzstereo::stereo_frame_t& m) {
 
 void RunMetrics::onTruth(const ptzstereo::sim_truth_t& m) {
   if (first_utime_ < 0) first_utime_ = m.utime;
+  // The frame period from the truth too, for listeners that do not take the frames.
+  if (last_truth_utime_ >= 0 && frame_period_us_ == 0)
+    frame_period_us_ = m.utime - last_truth_utime_;
+  last_truth_utime_ = m.utime;
   for (const auto& o : m.objects) {
     if (o.class_name != target_class_) continue;
     truth_position_[m.frame_seq] = {o.position_m[0], o.position_m[1], o.position_m[2]};
@@ -141,6 +145,8 @@ RunSummary RunMetrics::summary() const {
   s.position_error_rms_pct_of_range = rms(position_error_pct_);
   s.position_samples = static_cast<int64_t>(position_error_m_.size());
   s.target_lost_s = poses_without_target_ * frame_period_us_ * 1e-6;
+  s.poses_without_target = poses_without_target_;
+  s.frames_skipped_late = counter("ptz-sim.frames_skipped_late", 0);
   return s;
 }
 
@@ -160,7 +166,9 @@ std::string RunSummary::toJson() const {
     << "  \"frames_target_outside_image\": " << frames_target_outside_image << ",\n"
     << "  \"position_error_rms_m\": " << number(position_error_rms_m) << ",\n"
     << "  \"position_error_rms_pct_of_range\": " << number(position_error_rms_pct_of_range) << ",\n"
-    << "  \"target_lost_s\": " << number(target_lost_s) << "\n"
+    << "  \"target_lost_s\": " << number(target_lost_s) << ",\n"
+    << "  \"poses_without_target\": " << poses_without_target << ",\n"
+    << "  \"frames_skipped_late\": " << frames_skipped_late << "\n"
     << "}\n";
   return j.str();
 }

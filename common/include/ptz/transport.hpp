@@ -110,6 +110,43 @@ class StatusReporter {
 // scripts wait for that status), handles messages until SIGINT/SIGTERM, publishes a last status.
 int serveUntilStopped(lcm::LCM& lcm, StatusReporter& status);
 
+// A subscription whose decoding cannot take the process down: lcm-gen's decoders size arrays
+// from the sender's counts before checking the buffer, so a malformed message can throw. Such a
+// message is dropped and counted (dropped_undecodable); the handler sees only whole messages.
+template <class Msg>
+class SafeSubscription {
+ public:
+  using Handler = std::function<void(const std::string& channel, const Msg& msg)>;
+  SafeSubscription(lcm::LCM& lcm, const std::string& channel, StatusReporter& status,
+                   Handler handler, int queue_capacity = 0)
+      : status_(status), handler_(std::move(handler)) {
+    lcm::Subscription* sub = lcm.subscribeFunction(channel, &SafeSubscription::dispatch, this);
+    if (queue_capacity > 0) sub->setQueueCapacity(queue_capacity);
+  }
+  SafeSubscription(const SafeSubscription&) = delete;
+  SafeSubscription& operator=(const SafeSubscription&) = delete;
+
+ private:
+  static void dispatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                       SafeSubscription* self) {
+    Msg msg;
+    bool ok = false;
+    try {
+      ok = msg.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) >= 0;
+    } catch (const std::exception&) {
+      ok = false;
+    }
+    if (!ok) {
+      self->status_.countDropped(channel, "undecodable");
+      return;
+    }
+    self->handler_(channel, msg);
+  }
+
+  StatusReporter& status_;
+  Handler handler_;
+};
+
 // Warns on stderr at most once per period per key, with the count since the last warning.
 class RateLimitedLog {
  public:

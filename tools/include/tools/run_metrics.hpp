@@ -35,6 +35,8 @@ struct RunSummary {
   double position_error_rms_m = NAN;        // OBJECT_POSE target vs SIM_TRUTH
   double position_error_rms_pct_of_range = NAN;
   double target_lost_s = 0;  // frames without a target times the frame period
+  int64_t poses_without_target = 0;
+  int64_t frames_skipped_late = 0;  // by the simulator, running late (realtime)
   int64_t centering_samples = 0;
   int64_t position_samples = 0;
 
@@ -63,6 +65,7 @@ class RunMetrics {
   int64_t frames_seen_ = 0;
   int64_t frame_period_us_ = 0;
   int64_t last_frame_utime_ = -1;
+  int64_t last_truth_utime_ = -1;
   std::map<int64_t, std::vector<double>> truth_position_;  // seq -> x, y, z
   std::map<int64_t, std::vector<double>> centering_;
   std::vector<double> position_error_m_, position_error_pct_;
