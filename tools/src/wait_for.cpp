@@ -32,9 +32,9 @@ int main(int argc, char** argv) {
     if (wanted.empty()) throw ptz::ConfigError("--channels NAME[,NAME...] is required");
     Seen seen;
     for (const auto& c : wanted) lcm.subscribe(c, &Seen::on, &seen);
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::milliseconds(
-                              static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
+    const auto deadline =
+        std::chrono::steady_clock::now() +
+        std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
     while (seen.channels.size() < wanted.size() && !ptz::StopFlag::stopRequested()) {
       if (std::chrono::steady_clock::now() > deadline) {
         std::string missing;
