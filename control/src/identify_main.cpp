@@ -1,0 +1,102 @@
+// ptz-identify: fits K, T and tau of one axis from an LCM log of a step test (PTZ_SETPOINT and
+// PTZ_STATE) and prints the margins the paper's loop would have with that plant.
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "control/identify.hpp"
+#include "control/stability.hpp"
+#include "ptz/config.hpp"
+#include "ptzstereo/ptz_setpoint_t.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+
+namespace {
+
+double pick(const ptzstereo::ptz_head_state_t& h, const std::string& what) {
+  return what == "pan" ? h.pan_rad : what == "tilt" ? h.tilt_rad : h.zoom;
+}
+double pick(const ptzstereo::ptz_head_setpoint_t& h, const std::string& what) {
+  return what == "pan" ? h.pan_rad : what == "tilt" ? h.tilt_rad : h.zoom;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ptz::Params p("ptz-identify",
+                "Fits gain K, time constant T and dead time tau of one PTZ axis to a step test "
+                "recorded with lcm-logger (PTZ_SETPOINT and PTZ_STATE), and prints the margins of "
+                "the paper's loop with that plant.");
+  p.add("log", "", "the LCM log (required)");
+  p.add("axis", "left_pan", "left_pan, left_tilt, left_zoom, right_pan, right_tilt, right_zoom");
+  p.add("paper_gain", 1.7, "", "P gain of the loop whose margins are printed");
+  p.add("channel_prefix", "", "prefix of the channel names");
+  try {
+    if (!p.parse(argc, argv)) return 0;
+    const std::string axis = p.getString("axis");
+    const auto sep = axis.find('_');
+    const std::string side = axis.substr(0, sep),
+                      what = sep == std::string::npos ? "" : axis.substr(sep + 1);
+    if ((side != "left" && side != "right") ||
+        (what != "pan" && what != "tilt" && what != "zoom")) {
+      throw ptz::ConfigError(
+          "parameter 'axis' must be left_pan, left_tilt, left_zoom, right_pan, "
+          "right_tilt or right_zoom, got '" +
+          axis + "'");
+    }
+    const std::string path = p.getString("log");
+    if (path.empty()) throw ptz::ConfigError("--log FILE is required");
+    lcm::LogFile log(path, "r");
+    if (!log.good()) throw ptz::ConfigError("log '" + path + "': cannot read");
+    const std::string prefix = p.getString("channel_prefix");
+    ptz::control::AxisRecord record;
+    std::vector<ptzstereo::ptz_setpoint_t> setpoints;
+    bool lockstep = false;
+    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+      if (ev->channel == prefix + "PTZ_STATE") {
+        ptzstereo::ptz_state_t s;
+        if (s.decode(ev->data, 0, ev->datalen) < 0) continue;
+        // Lockstep states carry sim time, far from the wall clock they were published at.
+        lockstep |= std::abs(s.publish_utime - s.utime) > 10'000'000;
+        record.positions.emplace_back(s.utime * 1e-6,
+                                      pick(side == "left" ? s.left : s.right, what));
+      } else if (ev->channel == prefix + "PTZ_SETPOINT") {
+        ptzstereo::ptz_setpoint_t s;
+        if (s.decode(ev->data, 0, ev->datalen) >= 0) setpoints.push_back(s);
+      }
+    }
+    // A setpoint acts from when it was issued: in lockstep at the frame time it names, in real
+    // time when it was published.
+    for (const auto& s : setpoints) {
+      record.setpoints.emplace_back((lockstep ? s.utime : s.publish_utime) * 1e-6,
+                                    pick(side == "left" ? s.left : s.right, what));
+    }
+    const ptz::control::AxisFit fit = ptz::control::identifyAxis(record);
+    if (!fit.ok) {
+      std::fprintf(stderr, "ptz-identify: %s: %s\n", path.c_str(), fit.error.c_str());
+      return 1;
+    }
+    std::printf("%s from %zu states and %zu setpoints (%s clock):\n", axis.c_str(),
+                record.positions.size(), record.setpoints.size(),
+                lockstep ? "lockstep" : "real-time");
+    std::printf("  K = %.4f   T = %.4f s   tau = %.4f s   (rms residual %.2e)\n", fit.gain,
+                fit.time_constant_s, fit.dead_time_s, fit.rms_residual);
+    const auto m = ptz::control::continuousMargins(
+        {p.getDouble("paper_gain") * fit.gain, fit.time_constant_s, fit.dead_time_s});
+    if (m.has_crossover) {
+      std::printf(
+          "  with a P element of %g: omega_g = %.3f rad/s, phase margin %.1f deg (%.1f deg "
+          "at this tau), tau_max = %.3f s\n",
+          p.getDouble("paper_gain"), m.crossover_rad_s, m.phase_margin_deg,
+          m.phase_margin_at_delay_deg, m.tau_max_s);
+    } else {
+      std::printf("  with a P element of %g the loop gain is <= 1: stable for any delay\n",
+                  p.getDouble("paper_gain"));
+    }
+    return 0;
+  } catch (const ptz::ConfigError& e) {
+    std::fprintf(stderr, "ptz-identify: %s\n", e.what());
+    return 2;
+  }
+}
