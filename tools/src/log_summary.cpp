@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   p.add("channel_prefix", "", "prefix of the project's channel names");
   p.add("target_class", "red_ball", "class of the tracked object (for centring and 3D error)");
   p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame");
+  p.add("csv", "", "also write the heads' true pan/tilt/zoom per frame (SIM_TRUTH) to this CSV");
   try {
     if (!p.parse(argc, argv)) return 0;
   } catch (const ptz::ConfigError& e) {
@@ -59,6 +60,18 @@ int main(int argc, char** argv) {
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ptzstereo::process_status_t> last_status;
   int64_t frame_gaps = 0, last_seq = -1, undecodable = 0;
+  FILE* csv = nullptr;
+  if (!p.getString("csv").empty()) {
+    csv = std::fopen(p.getString("csv").c_str(), "w");
+    if (!csv) {
+      std::fprintf(stderr, "ptz-log-summary: cannot write '%s'\n", p.getString("csv").c_str());
+      return 1;
+    }
+    std::fprintf(csv,
+                 "t_s,frame_seq,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,"
+                 "right_tilt_rad,right_zoom\n");
+  }
+  int64_t first_truth_utime = -1;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     ChannelStats& c = channels[ev->channel];
     if (c.messages == 0) c.first_utime = ev->timestamp;
@@ -74,7 +87,15 @@ int main(int argc, char** argv) {
       metrics.onFrame(f);
     } else if (ch == prefix + "SIM_TRUTH") {
       ptzstereo::sim_truth_t t;
-      if (decode(*ev, &t, &undecodable)) metrics.onTruth(t);
+      if (!decode(*ev, &t, &undecodable)) continue;
+      metrics.onTruth(t);
+      if (csv) {
+        if (first_truth_utime < 0) first_truth_utime = t.utime;
+        std::fprintf(csv, "%.6f,%lld,%.9f,%.9f,%.6f,%.9f,%.9f,%.6f\n",
+                     (t.utime - first_truth_utime) * 1e-6, static_cast<long long>(t.frame_seq),
+                     t.left_head.pan_rad, t.left_head.tilt_rad, t.left_head.zoom,
+                     t.right_head.pan_rad, t.right_head.tilt_rad, t.right_head.zoom);
+      }
     } else if (ch == prefix + "OBJECT_POSE") {
       ptzstereo::object_pose_t m;
       if (decode(*ev, &m, &undecodable)) metrics.onPose(m);
@@ -88,6 +109,7 @@ int main(int argc, char** argv) {
       metrics.onStatus(s);
     }
   }
+  if (csv) std::fclose(csv);
   std::printf("log %s\n", path.c_str());
   std::printf("%-32s %10s %10s %12s\n", "channel", "messages", "rate Hz", "MB");
   for (const auto& [name, c] : channels) {
