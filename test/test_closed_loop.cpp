@@ -11,74 +11,10 @@
 #include "control/stability.hpp"
 #include "ptz/plant.hpp"
 #include "ptz/transport.hpp"
-#include "support/child_process.hpp"
-#include "support/lcm_wait.hpp"
-#include "tools/run_metrics.hpp"
+#include "support/closed_loop.hpp"
 
-using namespace std::chrono_literals;
-using ptz::test::ChildProcess;
-
-namespace {
-
-const std::string kConfig = PTZ_SOURCE_DIR "/config/";
-
-// Listens to everything a run's numbers need.
-struct Listener {
-  ptz::tools::RunMetrics metrics;
-  std::map<std::string, std::map<std::string, int64_t>> counters;  // process -> counter
-  std::vector<ptzstereo::sim_truth_t> truths;
-
-  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
-    metrics.onTruth(*m);
-    truths.push_back(*m);
-  }
-  void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
-    metrics.onPose(*m);
-  }
-  void onSetpoint(const lcm::ReceiveBuffer*, const std::string&,
-                  const ptzstereo::ptz_setpoint_t* m) {
-    metrics.onSetpoint(*m);
-  }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
-                const ptzstereo::process_status_t* m) {
-    metrics.onStatus(*m);
-    auto& c = counters[m->process];
-    c["up"] = 1;
-    for (const auto& counter : m->counters) c[counter.name] = counter.value;
-  }
-};
-
-// Starts ptz-detect and ptz-control, waits until both are up, runs ptz-sim to its end.
-std::unique_ptr<Listener> runLoop(const std::vector<std::string>& sim_args,
-                                  const std::vector<std::string>& control_args) {
-  lcm::LCM lcm(ptz::test::kTestUrl);
-  auto l = std::make_unique<Listener>();
-  lcm.subscribe("SIM_TRUTH", &Listener::onTruth, l.get());
-  lcm.subscribe("OBJECT_POSE", &Listener::onPose, l.get());
-  lcm.subscribe("PTZ_SETPOINT", &Listener::onSetpoint, l.get());
-  lcm.subscribe("PROCESS_STATUS_.*", &Listener::onStatus, l.get());
-  ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
-                       kConfig + "detect_default.yaml"});
-  std::vector<std::string> control_cmd = {PTZ_CONTROL_BIN, "--lcm-url", ptz::test::kTestUrl};
-  control_cmd.insert(control_cmd.end(), control_args.begin(), control_args.end());
-  ChildProcess control(control_cmd);
-  EXPECT_TRUE(ptz::test::handleUntil(
-      lcm, [&] { return l->counters["ptz-detect"]["up"] && l->counters["ptz-control"]["up"]; },
-      20s))
-      << "ptz-detect and ptz-control did not come up";
-  std::vector<std::string> cmd = {PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl,
-                                  "--clock",   "lockstep",  "--lockstep-timeout-ms",
-                                  "3000"};
-  cmd.insert(cmd.end(), sim_args.begin(), sim_args.end());
-  ChildProcess sim(cmd);
-  ptz::test::handleUntil(
-      lcm, [&] { return sim.wait(0ms) >= 0; }, 240s);
-  ptz::test::drain(lcm, 300ms);
-  EXPECT_EQ(sim.wait(0ms), 0);
-  return l;
-}
-
-}  // namespace
+using ptz::test::kConfig;
+using ptz::test::runLoop;
 
 TEST(ClosedLoop, TracksABallOnAFigureEightCentredInBothCameras) {
   // 20 s of the demo's scenario: a red ball on a figure-eight at 2-4 m, up to 0.45 m/s.

@@ -20,7 +20,8 @@ void declare(Params& p) {
   addPlantParams(p);  // the limits; the motor model itself is the plant's business
   const ControllerParams d;
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
-  p.add("mode", "track", "track (default: zero steady-state error, feed-forward) or paper");
+  p.add("mode", "track",
+        "track (default: zero steady-state error, feed-forward), paper, or smith (long delays)");
   p.add("paper_gain", d.paper_gain, "", "P gain of the paper mode");
   p.add("zoom_mode", "size", "size (keep target_radius_px) or hold");
   p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target");
@@ -32,6 +33,17 @@ void declare(Params& p) {
   p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)");
   p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored");
   p.add("max_range_m", d.max_range_m, "m", "farther targets are implausible and ignored");
+  p.add("smith_filter_s", d.smith_filter_s, "s",
+        "smith: time constant of the filter on the model error seen at capture");
+  p.add("smith_extra_delay_s", d.smith_extra_delay_s, "s",
+        "smith: delay from capture to the command (delay_us_p50 of the status) added to "
+        "dead_time_s");
+  p.add("kf_accel_psd_m2_s3", d.kalman.accel_psd_m2_s3, "m^2/s^3",
+        "smith: spectral density of the target's acceleration (Kalman process noise)");
+  p.add("kf_position_sigma_m", d.kf_position_sigma_m, "m",
+        "smith: position noise of a pose that carries no covariance");
+  p.add("kf_gate_chi2", d.kalman.gate_chi2, "",
+        "smith: poses farther from the prediction (Mahalanobis^2) are outliers");
   p.add("min_phase_margin_deg", 30.0, "deg",
         "warn when the measured delay leaves the paper's loop less phase margin");
 }
@@ -51,8 +63,20 @@ ControllerParams controllerParams(const Params& p) {
   c.min_range_m = p.getDouble("min_range_m");
   c.max_range_m = p.getDouble("max_range_m");
   c.limits = plantParamsFrom(p);
-  if (c.mode != "track" && c.mode != "paper") {
-    throw ConfigError("parameter 'mode' must be track or paper, got '" + c.mode + "'");
+  c.smith_filter_s = p.getDouble("smith_filter_s");
+  c.smith_extra_delay_s = p.getDouble("smith_extra_delay_s");
+  c.kalman.accel_psd_m2_s3 = p.getDouble("kf_accel_psd_m2_s3");
+  c.kf_position_sigma_m = p.getDouble("kf_position_sigma_m");
+  c.kalman.gate_chi2 = p.getDouble("kf_gate_chi2");
+  if (c.mode != "track" && c.mode != "paper" && c.mode != "smith") {
+    throw ConfigError("parameter 'mode' must be track, paper or smith, got '" + c.mode + "'");
+  }
+  if (!(c.smith_filter_s >= 0) || !(c.smith_extra_delay_s >= 0) ||
+      !(c.kalman.accel_psd_m2_s3 > 0) || !(c.kf_position_sigma_m > 0) ||
+      !(c.kalman.gate_chi2 > 0)) {
+    throw ConfigError(
+        "kf_accel_psd_m2_s3, kf_position_sigma_m, kf_gate_chi2 must be > 0 and "
+        "smith_filter_s, smith_extra_delay_s >= 0");
   }
   if (c.zoom_mode != "size" && c.zoom_mode != "hold") {
     throw ConfigError("parameter 'zoom_mode' must be size or hold, got '" + c.zoom_mode + "'");
@@ -106,7 +130,10 @@ class ControlNode {
     if (m->target_index >= 0 && m->target_index < m->num_objects &&
         m->target_index < static_cast<int32_t>(m->objects.size())) {
       const auto& o = m->objects[static_cast<size_t>(m->target_index)];
-      Observation obs{{o.position_m[0], o.position_m[1], o.position_m[2]}, o.radius_m};
+      Observation obs{
+          {o.position_m[0], o.position_m[1], o.position_m[2]},
+          o.radius_m,
+          Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(o.covariance_m2)};
       if (controller_.plausible(obs)) {
         target = obs;
       } else {
@@ -126,6 +153,7 @@ class ControlNode {
     lcm_->publish(ch_setpoint_, &out);
     status_.countOut(ch_setpoint_, (out.publish_utime - m->utime) / 1000.0);
     status_.increment(controller_.tracking() ? "setpoints_tracking" : "setpoints_without_target");
+    status_.setCounter("kalman_outliers", controller_.outliersRejected());
     monitorDelay((out.publish_utime - m->utime) * 1e-6);
   }
 

@@ -8,8 +8,11 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "control/smith.hpp"
 #include "control/stability.hpp"
+#include "control/track_analysis.hpp"
 #include "ptz/config.hpp"
 
 namespace {
@@ -100,6 +103,85 @@ bool plot(const std::string& dir, const ptz::control::LoopParams& loop,
   return std::system(("gnuplot '" + dir + "/plots.gp'").c_str()) == 0;
 }
 
+// The Smith loop's step response for a plant off from its model, at this frame rate.
+struct SmithCase {
+  double k_scale, t_scale, tau_scale;
+  std::vector<double> y;
+  ptz::control::StepFigures f;
+};
+
+std::vector<SmithCase> smithSensitivity(double motor_gain, double time_constant_s, double delay_s,
+                                        double fps) {
+  std::vector<SmithCase> cases;
+  auto add = [&](double k, double t, double tau) {
+    ptz::AxisParams plant;
+    plant.gain = motor_gain * k;
+    plant.time_constant_s = time_constant_s * t;
+    plant.dead_time_s = delay_s * tau;
+    ptz::control::SmithParams smith;
+    smith.model.gain = motor_gain;
+    smith.model.time_constant_s = time_constant_s;
+    smith.model.dead_time_s = delay_s;
+    SmithCase c{
+        k, t, tau, ptz::control::smithStepResponse(plant, smith, fps, 6.0 + 6 * delay_s), {}};
+    c.f = ptz::control::stepFigures(c.y, fps);
+    cases.push_back(std::move(c));
+  };
+  for (double k : {0.7, 1.0, 1.3}) {
+    for (double t : {0.7, 1.0, 1.3}) add(k, t, 1.0);
+  }
+  for (double tau : {0.8, 0.9, 1.1, 1.2, 1.5, 2.0}) add(1.0, 1.0, tau);
+  return cases;
+}
+
+void printSmith(const std::vector<SmithCase>& cases, double delay_s, double fps) {
+  std::printf(
+      "\nsmith mode (Smith predictor, model K, T, tau = plant's nominal), tau = %g s, %g Hz;\n"
+      "step responses with the real plant off from the model:\n"
+      "  plant K   plant T   plant tau   overshoot   settling (5 %%)   final error   decays\n",
+      delay_s, fps);
+  for (const auto& c : cases) {
+    std::printf("  x%-7.2f x%-7.2f x%-9.2f %7.1f %%   %10.2f s   %11.4f   %s\n", c.k_scale,
+                c.t_scale, c.tau_scale, 100 * c.f.overshoot, c.f.settling_time_s, c.f.final_error,
+                c.f.decays ? "yes" : "NO");
+  }
+}
+
+bool plotSmith(const std::string& dir, const std::vector<SmithCase>& cases, double delay_s,
+               double fps) {
+  std::ofstream f(dir + "/smith_step.dat");
+  std::ofstream g(dir + "/smith.gp");
+  g << "set terminal pngcairo size 1150,600 font 'DejaVu Sans,11' noenhanced\nset grid\n"
+    << "set key outside right\nset yrange [0:2]\n"
+    << "set output '" << dir << "/smith_step.png'\n"
+    << "set title 'Smith predictor, tau = " << delay_s << " s, " << fps
+    << " Hz: step responses with the plant off from the model'\n"
+    << "set xlabel 'time (s)'\nset ylabel 'output / reference step'\nplot ";
+  size_t n = 0;
+  for (const auto& c : cases) n = std::max(n, c.y.size());
+  for (size_t k = 0; k < n; ++k) {
+    f << k / fps;
+    for (const auto& c : cases) f << " " << (k < c.y.size() ? c.y[k] : NAN);
+    f << "\n";
+  }
+  bool first = true;
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const auto& c = cases[i];
+    // The corners of the +-30 % box and the delay errors; the rest only crowd the plot.
+    if (c.k_scale != 1.0 && c.t_scale == 1.0) continue;
+    if (c.k_scale == 1.0 && c.t_scale != 1.0) continue;
+    char title[96];
+    std::snprintf(title, sizeof(title), "plant K x%.1f, T x%.1f, tau x%.1f", c.k_scale, c.t_scale,
+                  c.tau_scale);
+    g << (first ? "" : ", ") << "'" << dir << "/smith_step.dat' using 1:" << i + 2
+      << " with lines lw 2 dt " << (c.tau_scale != 1.0 ? 2 : 1) << " title '" << title << "'";
+    first = false;
+  }
+  g << "\n";
+  g.close();
+  return std::system(("gnuplot '" + dir + "/smith.gp'").c_str()) == 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -114,6 +196,12 @@ int main(int argc, char** argv) {
   p.add("frame_rate_hz", 30.0, "Hz", "frame rate of the sampled loop (0: continuous only)");
   p.add("json", "", "also write every figure as JSON to this file");
   p.add("plots", "", "folder for bode.png, nyquist.png, step.png (gnuplot)");
+  p.add("smith", false,
+        "also the smith mode's sensitivity to a wrong plant model (K, T off by 30 %, tau off); "
+        "the plant is motor_gain / (1 + T s) e^(-s tau)");
+  p.add("motor_gain", 1.0, "", "smith: the motor's own gain (without the paper's P element)");
+  p.add("lead_s", 0.3, "s", "track: the feed-forward horizon of ptz-control's track mode");
+  p.add("rate_filter_s", 0.25, "s", "track: the time constant of its rate estimate");
   try {
     if (!p.parse(argc, argv)) return 0;
     control::LoopParams loop{p.getDouble("gain"), p.getDouble("time_constant_s"),
@@ -150,6 +238,24 @@ int main(int argc, char** argv) {
     }
     std::printf("at tau = %g s the continuous loop is %s\n", loop.delay_s,
                 m.stable ? "stable" : "unstable");
+    const control::TrackLoopParams track{loop.time_constant_s, p.getDouble("lead_s"),
+                                         p.getDouble("rate_filter_s"), loop.delay_s};
+    const control::TrackMargins tm = control::trackLoopMargins(track);
+    std::printf(
+        "\ntrack mode (the default; lead %g s, Tv %g s): the image feeds back only through rig "
+        "model error, g rad of measured target angle per rad of camera angle;\n"
+        "  stable for every delay while |g| < %.3f (peak |P F| = %.3f); at tau = %g s: "
+        "-%.3f < g < %.3f\n",
+        track.lead_s, track.rate_filter_s, tm.g_max_any_delay, tm.peak_gain, loop.delay_s,
+        tm.g_max_negative, tm.g_max_positive);
+    const bool smith = p.getBool("smith");
+    std::vector<SmithCase> smith_cases;
+    if (smith) {
+      if (!(fps > 0)) throw ConfigError("--smith needs frame_rate_hz > 0 (the loop is sampled)");
+      smith_cases =
+          smithSensitivity(p.getDouble("motor_gain"), loop.time_constant_s, loop.delay_s, fps);
+      printSmith(smith_cases, loop.delay_s, fps);
+    }
     const std::string json = p.getString("json");
     if (!json.empty()) {
       std::ofstream f(json);
@@ -167,7 +273,24 @@ int main(int argc, char** argv) {
         << ",\n  \"sampled_tau_max_s\": " << (fps > 0 ? num(tau_sampled) : "null")
         << ",\n  \"sampled_spectral_radius\": " << (fps > 0 ? num(sampled.spectral_radius) : "null")
         << ",\n  \"sampled_stable\": " << (fps > 0 ? (sampled.stable ? "true" : "false") : "null")
-        << "\n}\n";
+        << ",\n  \"track_g_max_any_delay\": " << num(tm.g_max_any_delay)
+        << ",\n  \"track_g_max_positive\": " << num(tm.g_max_positive)
+        << ",\n  \"track_g_max_negative\": " << num(tm.g_max_negative);
+      if (smith) {
+        f << ",\n  \"smith\": [";
+        for (size_t i = 0; i < smith_cases.size(); ++i) {
+          const auto& c = smith_cases[i];
+          f << (i ? ",\n    " : "\n    ") << "{\"plant_gain_scale\": " << num(c.k_scale)
+            << ", \"plant_time_constant_scale\": " << num(c.t_scale)
+            << ", \"plant_delay_scale\": " << num(c.tau_scale)
+            << ", \"overshoot\": " << num(c.f.overshoot)
+            << ", \"settling_time_s\": " << num(c.f.settling_time_s)
+            << ", \"final_error\": " << num(c.f.final_error)
+            << ", \"decays\": " << (c.f.decays ? "true" : "false") << "}";
+        }
+        f << "\n  ]";
+      }
+      f << "\n}\n";
       if (!f) throw ConfigError("cannot write '" + json + "'");
     }
     const std::string dir = p.getString("plots");
@@ -179,6 +302,11 @@ int main(int argc, char** argv) {
       }
       std::printf("plots: %s/bode.png %s/nyquist.png %s/step.png\n", dir.c_str(), dir.c_str(),
                   dir.c_str());
+      if (smith && !plotSmith(dir, smith_cases, loop.delay_s, fps)) {
+        std::fprintf(stderr, "ptz-stability: gnuplot failed on the smith plot\n");
+        return 1;
+      }
+      if (smith) std::printf("smith plot: %s/smith_step.png\n", dir.c_str());
     }
     return 0;
   } catch (const ConfigError& e) {

@@ -15,6 +15,10 @@
 // - "paper": exactly the paper's loop, a P element on the angular error measured in the image
 //   at capture: u = paper_gain * (theta* - theta_capture). With the PT1 axis this is the open
 //   loop 1.7 / (1 + 0.24 s) e^(-s tau) with unity feedback (steady-state error 1 / (1 + 1.7)).
+// - "smith": for loops with a long delay. A constant-velocity Kalman filter on the 3D position
+//   predicts where the target will be when a command issued now acts (after the model's dead
+//   time), and a Smith predictor per pan/tilt axis (smith.hpp) steers the plant model's
+//   delay-free output onto that prediction, corrected by the measured angle at capture.
 //
 // Both: setpoints slew at most max_setpoint_rate and stay within the limits; without a target
 // for lost_hold_s the last setpoint holds, then the heads return home at home_rate; a target
@@ -24,16 +28,19 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 
+#include "control/kalman.hpp"
+#include "control/smith.hpp"
 #include "ptz/plant.hpp"
 #include "ptz/rig.hpp"
 
 namespace ptz::control {
 
 struct ControllerParams {
-  std::string mode = "track";  // "track" or "paper"
+  std::string mode = "track";  // "track", "paper" or "smith"
   double paper_gain = 1.7;
   std::string zoom_mode = "size";  // "size" (keep target_radius_px) or "hold"
   double target_radius_px = 30.0;
@@ -45,13 +52,18 @@ struct ControllerParams {
   double home_rate = 0.3;  // rad/s (pan, tilt) and ratio/s (zoom) when returning home
   double min_range_m = 0.3;
   double max_range_m = 50.0;
-  PtzPlant::Params limits = defaultPlantParams();
+  PtzPlant::Params limits = defaultPlantParams();  // smith: also the plant model
+  double smith_filter_s = 0.1;        // time constant of the Smith predictor's model-error filter
+  double smith_extra_delay_s = 0.0;   // added to the model's dead time (capture -> command)
+  double kf_position_sigma_m = 0.01;  // when a pose has no covariance
+  KalmanParams kalman;
 };
 
 // What ptz-detect measured in one frame.
 struct Observation {
   Eigen::Vector3d position_head_m;
-  double radius_m = 0;  // <= 0: unknown (zoom holds)
+  double radius_m = 0;                                      // <= 0: unknown (zoom holds)
+  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();  // zero: unknown
 };
 
 class Controller {
@@ -67,9 +79,17 @@ class Controller {
   bool plausible(const Observation& o) const;
   const std::array<PtzPose, 2>& setpoint() const { return setpoint_; }
   bool tracking() const { return tracking_; }
+  // Smith mode: target positions the Kalman filter's gate threw out (wrong detections).
+  int64_t outliersRejected() const { return outliers_rejected_; }
 
  private:
   PtzPose desired(Side side, const Observation& o, const PtzPose& at_capture, double dt);
+  // Smith mode: the setpoint for the target predicted by the filter, axis by axis.
+  PtzPose desiredSmith(Side side, const Observation& o, const PtzPose& at_capture, double t_s,
+                       double dt);
+  void observe(double t_s, const Observation& o);
+  double zoomFor(Side side, const Observation& o, const PtzPose& at_capture) const;
+  void smithSent(double t_s, const PtzPose& left_at_capture, const PtzPose& right_at_capture);
   void slewTowards(const std::array<PtzPose, 2>& goal, double dt, double rate_angle,
                    double rate_zoom);
 
@@ -81,6 +101,9 @@ class Controller {
   std::optional<double> last_t_s_;
   std::optional<double> last_seen_t_s_;
   bool tracking_ = false;
+  ConstantVelocityKalman kalman_;
+  int64_t outliers_rejected_ = 0;
+  std::array<SmithPredictor, 4> smith_;  // left pan, left tilt, right pan, right tilt
 };
 
 }  // namespace ptz::control
