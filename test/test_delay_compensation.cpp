@@ -97,3 +97,22 @@ TEST(DelayCompensation, SmithStaysStableWithItsPlantModelThirtyPercentOff) {
     }
   }
 }
+
+TEST(DelayCompensation, TheLiveMonitorWarnsWhenTheModelsDelayIsWrong) {
+  // Realtime: capture -> setpoint takes tens of ms here, so a model that assumes 0.5 s more than
+  // the plant's dead time is wrong by about that, and the status says so.
+  auto run = runLoop({"--config", kConfig + "sim_default.yaml", "--clock", "realtime", "--frames",
+                      "150", "--encoding", "jpeg"},
+                     {"--config", kConfig + "control_smith.yaml", "--dead-time-s", "0",
+                      "--smith-extra-delay-s", "0.5"});
+  auto& c = run->counters["ptz-control"];
+  ASSERT_TRUE(c.count("smith_delay_error_us")) << "no delay report in 5 s";
+  std::printf("capture -> setpoint p50 %.1f ms; smith model error %.1f ms; warning: %s\n",
+              c["delay_us_p50"] / 1000.0, c["smith_delay_error_us"] / 1000.0,
+              run->warnings["ptz-control"].c_str());
+  EXPECT_GT(c["delay_us_p50"], 0);
+  EXPECT_LT(c["delay_us_p50"], 200000);
+  EXPECT_NEAR(c["smith_delay_error_us"], c["delay_us_p50"] - 500000, 1);
+  EXPECT_NE(run->warnings["ptz-control"].find("smith model assumes 500.0 ms"), std::string::npos)
+      << run->warnings["ptz-control"];
+}

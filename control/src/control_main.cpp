@@ -90,6 +90,12 @@ ControllerParams controllerParams(const Params& p) {
   return c;
 }
 
+std::string millis(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f", v);
+  return text;
+}
+
 bool finitePose(const ptzstereo::ptz_head_setpoint_t& h) {
   return std::isfinite(h.pan_rad) && std::isfinite(h.tilt_rad) && std::isfinite(h.zoom);
 }
@@ -104,6 +110,10 @@ class ControlNode {
         delay_monitor_({p.getDouble("paper_gain") * p.getDouble("pan_gain"),
                         p.getDouble("pan_time_constant_s"), 0.0},
                        p.getDouble("dead_time_s"), p.getDouble("min_phase_margin_deg")),
+        // Smith mode: the delay its model assumes, checked against the measured one.
+        smith_delay_s_(p.getString("mode") == "smith"
+                           ? p.getDouble("dead_time_s") + p.getDouble("smith_extra_delay_s")
+                           : -1),
         ch_pose_(channel(p, channels::kObjectPose)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
@@ -165,12 +175,22 @@ class ControlNode {
     status_.setCounter("delay_us_p50", std::llround(r.delay_ms_p50 * 1000));
     status_.setCounter("delay_us_p99", std::llround(r.delay_ms_p99 * 1000));
     status_.setCounter("phase_margin_millideg", std::llround(r.phase_margin_deg * 1000));
-    if (r.below_threshold) {
-      const std::string msg = "delay p99 " + std::to_string(r.delay_ms_p99) +
-                              " ms leaves a phase margin of " + std::to_string(r.phase_margin_deg) +
-                              " deg";
-      status_.setState(ptzstereo::process_status_t::STATE_WARN, msg);
-      log_.warn("margin", "ptz-control: " + msg);
+    std::string warning;
+    if (smith_delay_s_ >= 0) {
+      // The paper loop's margin means nothing to the Smith predictor; a wrong model delay does.
+      const double error_s = r.delay_ms_p50 / 1000 - smith_delay_s_;
+      status_.setCounter("smith_delay_error_us", std::llround(error_s * 1e6));
+      if (std::abs(error_s) > std::max(0.1 * smith_delay_s_, 0.01)) {
+        warning = "measured delay p50 " + millis(r.delay_ms_p50) + " ms, the smith model assumes " +
+                  millis(smith_delay_s_ * 1000) + " ms: set smith_extra_delay_s";
+      }
+    } else if (r.below_threshold) {
+      warning = "delay p99 " + millis(r.delay_ms_p99) + " ms leaves a phase margin of " +
+                millis(r.phase_margin_deg) + " deg";
+    }
+    if (!warning.empty()) {
+      status_.setState(ptzstereo::process_status_t::STATE_WARN, warning);
+      log_.warn("margin", "ptz-control: " + warning);
     } else {
       status_.setState(ptzstereo::process_status_t::STATE_OK, "");
     }
@@ -181,6 +201,7 @@ class ControlNode {
   RateLimitedLog log_;
   Controller controller_;
   DelayMonitor delay_monitor_;
+  double smith_delay_s_;  // < 0: not in smith mode
   std::string ch_pose_, ch_state_, ch_setpoint_;
   std::unique_ptr<SafeSubscription<ptzstereo::object_pose_t>> poses_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;

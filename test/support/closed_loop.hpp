@@ -22,6 +22,7 @@ inline const std::string kConfig = PTZ_SOURCE_DIR "/config/";
 struct Listener {
   ptz::tools::RunMetrics metrics;
   std::map<std::string, std::map<std::string, int64_t>> counters;  // process -> counter
+  std::map<std::string, std::string> warnings;  // process -> its last WARN message
   std::vector<ptzstereo::sim_truth_t> truths;
 
   void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
@@ -41,6 +42,7 @@ struct Listener {
     auto& c = counters[m->process];
     c["up"] = 1;
     for (const auto& counter : m->counters) c[counter.name] = counter.value;
+    if (m->state == ptzstereo::process_status_t::STATE_WARN) warnings[m->process] = m->message;
   }
 };
 
