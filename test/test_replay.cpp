@@ -1,0 +1,87 @@
+// Process replay: the committed log of a 2 s closed-loop run (JPEG frames) replayed through a
+// fresh ptz-detect gives bit-identical poses; a change in perception is noticed.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <string>
+
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "support/child_process.hpp"
+#include "tools/log_reader.hpp"
+
+using namespace std::chrono_literals;
+using ptz::test::ChildProcess;
+
+namespace {
+
+const std::string kFixture = PTZ_SOURCE_DIR "/test/fixtures/closed_loop_2s.lcmlog";
+constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
+
+std::map<int64_t, ptzstereo::object_pose_t> poses(const std::string& path, int64_t* frames) {
+  std::map<int64_t, ptzstereo::object_pose_t> out;
+  ptz::tools::LogReader reader(path);
+  *frames = 0;
+  while (const lcm::LogEvent* ev = reader.next()) {
+    if (ev->channel == "STEREO_FRAME") ++*frames;
+    ptzstereo::object_pose_t p;
+    if (ev->channel == "OBJECT_POSE" && p.decode(ev->data, 0, ev->datalen) >= 0) {
+      out[p.frame_seq] = p;
+    }
+  }
+  EXPECT_TRUE(reader.breaks().empty()) << reader.describeBreaks();
+  return out;
+}
+
+// Runs ptz-detect (with extra flags) and ptz-replay --check; returns replay's exit code.
+int replay(const std::vector<std::string>& detect_flags, const std::string& out) {
+  std::vector<std::string> detect = {PTZ_DETECT_BIN, "--lcm-url", kUrl, "--config",
+                                     PTZ_SOURCE_DIR "/config/detect_default.yaml"};
+  detect.insert(detect.end(), detect_flags.begin(), detect_flags.end());
+  ChildProcess d(detect);
+  ChildProcess r({PTZ_REPLAY_BIN, "--lcm-url", kUrl, "--log", kFixture, "--out", out, "--check",
+                  "true", "--timeout-s", "10"});
+  return r.wait(120s);
+}
+
+}  // namespace
+
+TEST(Replay, TheCommittedRunReplaysBitIdentically) {
+  int64_t frames = 0;
+  const auto logged = poses(kFixture, &frames);
+  ASSERT_GE(frames, 50);
+  ASSERT_EQ(static_cast<int64_t>(logged.size()), frames) << "the fixture should answer every frame";
+  const std::string out = std::string(::testing::TempDir()) + "/replayed.lcmlog";
+  EXPECT_EQ(replay({}, out), 0);
+  int64_t none = 0;
+  const auto replayed = poses(out, &none);
+  ASSERT_EQ(replayed.size(), logged.size());
+  int targets = 0;
+  for (const auto& [seq, l] : logged) {
+    const auto& r = replayed.at(seq);
+    ASSERT_EQ(r.num_objects, l.num_objects) << "frame " << seq;
+    EXPECT_EQ(r.target_index, l.target_index) << "frame " << seq;
+    targets += l.target_index >= 0;
+    for (size_t i = 0; i < l.objects.size(); ++i) {
+      EXPECT_EQ(std::memcmp(r.objects[i].position_m, l.objects[i].position_m,
+                            sizeof(l.objects[i].position_m)),
+                0)
+          << "frame " << seq << " object " << i;
+    }
+  }
+  EXPECT_EQ(targets, frames);  // the ball is seen in every frame: the comparison means something
+}
+
+TEST(Replay, AChangeInPerceptionIsNoticed) {
+  // A larger morphology kernel moves centroids by fractions of a pixel: not identical.
+  const std::string out = std::string(::testing::TempDir()) + "/changed.lcmlog";
+  EXPECT_EQ(replay({"--morph-size-px", "5"}, out), 1);
+}
+
+TEST(Replay, TheScriptReplaysAndChecks) {
+  ChildProcess script({"/usr/bin/env", "PTZ_BUILD=" PTZ_BUILD_DIR, PTZ_SOURCE_DIR "/scripts/replay",
+                       kFixture, "--check"});
+  EXPECT_EQ(script.wait(120s), 0);
+}

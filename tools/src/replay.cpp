@@ -1,0 +1,158 @@
+// ptz-replay: process replay. Publishes every STEREO_FRAME of a recorded log, one at a time,
+// to the real ptz-detect (started beforehand, e.g. by scripts/replay) and waits for the
+// OBJECT_POSE that answers it before the next frame, so nothing is dropped and the replay runs
+// as fast as detection. Each replayed pose is compared with the logged one of the same frame:
+// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference.
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+#include "tools/log_reader.hpp"
+
+namespace {
+
+// The pose's bytes without its publish time: what must be identical between runs.
+std::vector<uint8_t> canonical(ptzstereo::object_pose_t pose) {
+  pose.publish_utime = 0;
+  std::vector<uint8_t> bytes(static_cast<size_t>(pose.getEncodedSize()));
+  pose.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+double largestPositionChange(const ptzstereo::object_pose_t& a, const ptzstereo::object_pose_t& b) {
+  if (a.num_objects != b.num_objects) return INFINITY;
+  double worst = 0;
+  for (size_t i = 0; i < a.objects.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      worst = std::max(worst, std::abs(a.objects[i].position_m[k] - b.objects[i].position_m[k]));
+    }
+  }
+  return worst;
+}
+
+struct Replies {
+  std::map<int64_t, ptzstereo::object_pose_t> poses;  // by frame_seq
+  bool detect_up = false;
+  void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
+    poses[m->frame_seq] = *m;
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&) { detect_up = true; }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ptz::Params p("ptz-replay",
+                "Replays the STEREO_FRAME messages of an LCM log through a running ptz-detect, "
+                "one frame at a time, and compares its OBJECT_POSE messages with the logged ones.");
+  ptz::addTransportParams(p);
+  p.add("log", "", "the recorded LCM log (required)");
+  p.add("log_channel_prefix", "", "prefix of the channel names in the log");
+  p.add("out", "", "write the replayed OBJECT_POSE messages to this LCM log");
+  p.add("timeout_s", 5.0, "s", "wait this long for each answer (and for ptz-detect to be up)");
+  p.add("check", false, "exit 1 unless every replayed pose is identical to the logged one");
+  return ptz::runProcess(argc, argv, p, [](const ptz::Params& params, lcm::LCM& lcm) {
+    const std::string path = params.getString("log");
+    if (path.empty()) throw ptz::ConfigError("--log FILE is required");
+    const std::string in_prefix = params.getString("log_channel_prefix");
+    const auto timeout =
+        std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
+    // The logged poses first (small), then the frames, streamed.
+    std::map<int64_t, ptzstereo::object_pose_t> logged;
+    {
+      ptz::tools::LogReader reader(path);
+      while (const lcm::LogEvent* ev = reader.next()) {
+        ptzstereo::object_pose_t pose;
+        if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
+            pose.decode(ev->data, 0, ev->datalen) >= 0) {
+          logged[pose.frame_seq] = pose;
+        }
+      }
+      if (!reader.breaks().empty()) std::fputs(reader.describeBreaks().c_str(), stderr);
+    }
+    Replies replies;
+    lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose), &Replies::onPose, &replies);
+    lcm.subscribe(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &Replies::onStatus, &replies);
+    auto waitFor = [&](auto done) {
+      const auto deadline = std::chrono::steady_clock::now() + timeout;
+      while (!done() && std::chrono::steady_clock::now() < deadline &&
+             !ptz::StopFlag::stopRequested()) {
+        lcm.handleTimeout(20);
+      }
+      return done();
+    };
+    if (!waitFor([&] { return replies.detect_up; })) {
+      throw ptz::ConfigError("ptz-detect is not running on this LCM network (no " +
+                             ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT") + ")");
+    }
+    std::unique_ptr<lcm::LogFile> out;
+    if (!params.getString("out").empty()) {
+      out = std::make_unique<lcm::LogFile>(params.getString("out"), "w");
+      if (!out->good()) throw ptz::ConfigError("cannot write '" + params.getString("out") + "'");
+    }
+    int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0;
+    double worst_m = 0;
+    const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
+    ptz::tools::LogReader reader(path);
+    while (const lcm::LogEvent* ev = reader.next()) {
+      if (ptz::StopFlag::stopRequested()) break;
+      ptzstereo::stereo_frame_t frame;
+      if (ev->channel != in_prefix + ptz::channels::kStereoFrame ||
+          frame.decode(ev->data, 0, ev->datalen) < 0) {
+        continue;
+      }
+      ++frames;
+      lcm.publish(frame_channel, ev->data, static_cast<unsigned>(ev->datalen));
+      if (!waitFor([&] { return replies.poses.count(frame.seq) > 0; })) {
+        ++unanswered;
+        std::fprintf(stderr, "ptz-replay: no pose for frame %lld within the timeout\n",
+                     static_cast<long long>(frame.seq));
+        continue;
+      }
+      const ptzstereo::object_pose_t& replayed = replies.poses[frame.seq];
+      if (out) {
+        std::vector<uint8_t> bytes(static_cast<size_t>(replayed.getEncodedSize()));
+        replayed.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+        lcm::LogEvent e{};
+        e.eventnum = frames - 1;
+        e.timestamp = replayed.publish_utime;
+        e.channel = ptz::channels::kObjectPose;
+        e.datalen = static_cast<int32_t>(bytes.size());
+        e.data = bytes.data();
+        out->writeEvent(&e);
+      }
+      const auto it = logged.find(frame.seq);
+      if (it == logged.end()) {
+        ++not_logged;
+      } else if (canonical(it->second) == canonical(replayed)) {
+        ++identical;
+      } else {
+        ++different;
+        const double change = largestPositionChange(it->second, replayed);
+        worst_m = std::max(worst_m, change);
+        std::fprintf(stderr,
+                     "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
+                     static_cast<long long>(frame.seq), change);
+      }
+      replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
+    }
+    if (!reader.breaks().empty()) std::fputs(reader.describeBreaks().c_str(), stderr);
+    std::printf(
+        "replayed %lld frames: %lld poses identical to the log, %lld different (largest "
+        "position change %g m), %lld unanswered, %lld without a logged pose\n",
+        static_cast<long long>(frames), static_cast<long long>(identical),
+        static_cast<long long>(different), worst_m, static_cast<long long>(unanswered),
+        static_cast<long long>(not_logged));
+    if (frames == 0) throw ptz::ConfigError("no STEREO_FRAME in '" + path + "'");
+    return params.getBool("check") && (different > 0 || unanswered > 0 || identical == 0) ? 1 : 0;
+  });
+}
