@@ -98,14 +98,14 @@ void RunMetrics::onPose(const ptzstereo::object_pose_t& m) {
 }
 
 void RunMetrics::onSetpoint(const ptzstereo::ptz_setpoint_t& m) {
-  // Only where utime is wall-clock time (realtime runs): in lockstep it is sim time.
-  const double latency_ms = (m.publish_utime - m.utime) / 1000.0;
-  if (latency_ms < 0 || latency_ms >= 60'000) return;
-  latency_ms_.push_back(latency_ms);
+  // Both publish times are wall-clock time, in lockstep too.
   auto it = frame_publish_utime_.find(m.frame_seq);
   if (it != frame_publish_utime_.end()) {
     chain_latency_ms_.push_back((m.publish_utime - it->second) / 1000.0);
   }
+  // Only where utime is wall-clock time (realtime runs): in lockstep it is sim time.
+  const double latency_ms = (m.publish_utime - m.utime) / 1000.0;
+  if (latency_ms >= 0 && latency_ms < 60'000) latency_ms_.push_back(latency_ms);
 }
 
 void RunMetrics::onStatus(const ptzstereo::process_status_t& m) {

@@ -1,6 +1,7 @@
-// Reads an LCM log event by event (lcm::LogFile) and notes where it is broken: LCM's reader
-// silently skips garbage up to the next sync word and stops at a partial event, so the gaps are
-// found from the file offsets (an event is 28 bytes of header + channel + data).
+// Reads an LCM log event by event (lcm::LogFile) and notes where it is broken. LCM's reader
+// stops at a damaged event; this one then resumes at the next sync word, so the rest of the log
+// is still read. Gaps are found from the file offsets (an event is 28 bytes of header + channel
+// + data).
 #pragma once
 
 #include <lcm/lcm-cpp.hpp>
@@ -28,10 +29,13 @@ class LogReader {
   const std::vector<Break>& breaks() const { return breaks_; }
   int64_t events() const { return events_; }
   int64_t fileBytes() const { return file_bytes_; }
+  const std::string& path() const { return path_; }
   // One line per break, for messages and reports ("" when the log is whole).
   std::string describeBreaks() const;
 
  private:
+  int64_t findSync(int64_t from);
+
   std::string path_;
   std::unique_ptr<lcm::LogFile> log_;
   int64_t file_bytes_ = 0;

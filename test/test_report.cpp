@@ -1,0 +1,181 @@
+// ptz-report on the committed 2 s run: every plot, and a summary whose numbers match what this
+// test computes from the log on its own (OpenCV's projectPoints for the centring); broken,
+// empty and unrelated logs.
+#include <gtest/gtest.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/process_status_t.hpp"
+#include "ptzstereo/sim_truth_t.hpp"
+#include "tools/report.hpp"
+
+namespace {
+
+const std::string kFixture = PTZ_SOURCE_DIR "/test/fixtures/closed_loop_2s.lcmlog";
+
+std::string tempPath(const std::string& name) {
+  return std::string(::testing::TempDir()) + name;
+}
+
+std::string readAll(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+
+// The true target's pixel offset from the image centre, by OpenCV from the camera model alone.
+double offsetPx(const ptzstereo::camera_model_t& cam, const double p_head[3]) {
+  cv::Matx33d R_head_camera(cam.rotation_head_camera);
+  const cv::Matx33d R = R_head_camera.t();  // head -> camera
+  const cv::Vec3d c(cam.position_head_m[0], cam.position_head_m[1], cam.position_head_m[2]);
+  const cv::Vec3d t = -(R * c);
+  cv::Vec3d rvec;
+  cv::Rodrigues(R, rvec);
+  const cv::Matx33d K(cam.fx_px, 0, cam.cx_px, 0, cam.fy_px, cam.cy_px, 0, 0, 1);
+  std::vector<double> dist(cam.distortion, cam.distortion + 5);
+  std::vector<cv::Point2d> px;
+  cv::projectPoints(std::vector<cv::Point3d>{{p_head[0], p_head[1], p_head[2]}}, rvec, t, K, dist,
+                    px);
+  return std::hypot(px[0].x - (cam.width - 1) / 2.0, px[0].y - (cam.height - 1) / 2.0);
+}
+
+// A number of summary.json (OpenCV's JSON reader refuses null).
+double jsonNumber(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return NAN;
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
+int runReport(const std::string& args, std::string* output) {
+  const std::string out = tempPath("report_output.txt");
+  const int status = std::system((PTZ_REPORT_BIN " " + args + " > " + out + " 2>&1").c_str());
+  *output = readAll(out);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+}  // namespace
+
+TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
+  const std::string dir = tempPath("fixture.report");
+  std::string output;
+  ASSERT_EQ(runReport(kFixture + " --out " + dir + " --settle-s 0.5", &output), 0) << output;
+  for (const char* png : {"ptz.png", "centring.png", "position.png", "delay.png", "rates.png"}) {
+    const cv::Mat image = cv::imread(dir + "/" + png);
+    EXPECT_EQ(image.cols, 1000) << png;
+    EXPECT_EQ(image.rows, 750) << png;
+    EXPECT_NE(readAll(dir + "/report.md").find(std::string("](") + png + ")"), std::string::npos)
+        << png << " is not shown in report.md";
+  }
+  // The numbers, from the log by this test.
+  int64_t frames = 0, poses = 0, without_target = 0;
+  std::map<int64_t, ptzstereo::sim_truth_t> truth;
+  std::vector<double> errors_m, centring_px;
+  int64_t first_utime = -1;
+  lcm::LogFile log(kFixture, "r");
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == "STEREO_FRAME") ++frames;
+    if (ev->channel == "SIM_TRUTH") {
+      ptzstereo::sim_truth_t t;
+      ASSERT_GE(t.decode(ev->data, 0, ev->datalen), 0);
+      truth[t.frame_seq] = t;
+      if (first_utime < 0) first_utime = t.utime;
+      if (t.utime - first_utime >= 500000) {
+        centring_px.push_back(offsetPx(t.left_camera, t.objects[0].position_m));
+        centring_px.push_back(offsetPx(t.right_camera, t.objects[0].position_m));
+      }
+    }
+    if (ev->channel == "OBJECT_POSE") {
+      ptzstereo::object_pose_t p;
+      ASSERT_GE(p.decode(ev->data, 0, ev->datalen), 0);
+      ++poses;
+      if (p.target_index < 0) {
+        ++without_target;
+        continue;
+      }
+      const auto& o = p.objects[static_cast<size_t>(p.target_index)];
+      const auto& t = truth.at(p.frame_seq).objects[0];
+      errors_m.push_back(std::hypot(o.position_m[0] - t.position_m[0],
+                                    o.position_m[1] - t.position_m[1],
+                                    o.position_m[2] - t.position_m[2]));
+    }
+  }
+  auto rms = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s / v.size());
+  };
+  ASSERT_EQ(truth.begin()->second.objects[0].class_name, "red_ball");
+  const std::string summary = readAll(dir + "/summary.json");
+  EXPECT_EQ(jsonNumber(summary, "frames_published"), frames);
+  EXPECT_EQ(jsonNumber(summary, "frames_processed"), poses);
+  EXPECT_EQ(jsonNumber(summary, "poses_without_target"), without_target);
+  EXPECT_NEAR(jsonNumber(summary, "position_error_rms_m"), rms(errors_m), 1e-5);
+  EXPECT_NEAR(jsonNumber(summary, "centering_rms_px"), rms(centring_px), 1e-3);
+  // Every setpoint is in the delay histogram's data.
+  const std::string delays = readAll(dir + "/delay.csv");
+  EXPECT_EQ(std::count(delays.begin(), delays.end(), '\n') - 1, poses);
+}
+
+TEST(Report, ATruncatedLogIsReportedAsFarAsItGoesAndSaysWhere) {
+  const std::string bytes = readAll(kFixture);
+  const std::string cut = tempPath("truncated.lcmlog");
+  const size_t keep = bytes.size() * 6 / 10;
+  std::ofstream(cut, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(keep));
+  std::string output;
+  ASSERT_EQ(runReport(cut + " --out " + tempPath("truncated.report"), &output), 0) << output;
+  EXPECT_NE(output.find("partial or unreadable event at byte"), std::string::npos) << output;
+  EXPECT_NE(readAll(tempPath("truncated.report/report.md")).find("The log is broken"),
+            std::string::npos);
+  EXPECT_FALSE(cv::imread(tempPath("truncated.report/ptz.png")).empty());
+}
+
+TEST(Report, GarbageInTheMiddleIsSkippedAndLocated) {
+  std::string bytes = readAll(kFixture);
+  const size_t at = bytes.size() / 2;
+  for (size_t i = at; i < at + 5000; ++i) bytes[i] = static_cast<char>(i * 7919 % 251);
+  const std::string path = tempPath("corrupt.lcmlog");
+  std::ofstream(path, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  ptz::tools::LogReader reader(path);
+  const ptz::tools::ReportData d = ptz::tools::collectReport(reader, {});
+  ASSERT_FALSE(reader.breaks().empty());
+  const auto& b = reader.breaks().front();
+  EXPECT_LE(b.offset, static_cast<int64_t>(at));  // the broken event starts at or before it
+  EXPECT_GE(b.offset + b.bytes, static_cast<int64_t>(at + 5000));
+  EXPECT_GT(d.states.size(), 100u);  // what follows is read
+}
+
+TEST(Report, AnEmptyLogOrOneWithoutTheNeededChannelsIsRefused) {
+  const std::string empty = tempPath("empty.lcmlog");
+  std::ofstream(empty).close();
+  std::string output;
+  EXPECT_EQ(runReport(empty, &output), 1);
+  EXPECT_NE(output.find("no events"), std::string::npos) << output;
+
+  const std::string other = tempPath("status_only.lcmlog");
+  {
+    lcm::LogFile log(other, "w");
+    ptzstereo::process_status_t s{};
+    s.process = "someone";
+    std::vector<uint8_t> buf(static_cast<size_t>(s.getEncodedSize()));
+    s.encode(buf.data(), 0, static_cast<int>(buf.size()));
+    lcm::LogEvent ev{};
+    ev.channel = "PROCESS_STATUS_SOMEONE";
+    ev.datalen = static_cast<int32_t>(buf.size());
+    ev.data = buf.data();
+    log.writeEvent(&ev);
+  }
+  EXPECT_EQ(runReport(other, &output), 1);
+  EXPECT_NE(output.find("none of the channels a report needs"), std::string::npos) << output;
+  EXPECT_NE(output.find("PROCESS_STATUS_SOMEONE"), std::string::npos) << output;
+  EXPECT_EQ(runReport("/nonexistent/run.lcmlog", &output), 1);
+  EXPECT_NE(output.find("cannot open log '/nonexistent/run.lcmlog'"), std::string::npos) << output;
+}

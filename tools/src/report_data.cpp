@@ -1,0 +1,210 @@
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "control/stability.hpp"
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_detections_t.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+#include "tools/report.hpp"
+
+namespace ptz::tools {
+namespace {
+
+template <typename T>
+bool decode(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
+  if (msg->decode(ev.data, 0, ev.datalen) >= 0) return true;
+  ++*undecodable;
+  return false;
+}
+
+template <typename Head>
+std::array<double, 6> sixAxes(const Head& l, const Head& r) {
+  return {l.pan_rad, l.tilt_rad, l.zoom, r.pan_rad, r.tilt_rad, r.zoom};
+}
+
+// Grows a per-second series to hold bin and returns it.
+template <typename T>
+T& bin(std::vector<T>* series, size_t index) {
+  if (series->size() <= index) series->resize(index + 1, T{});
+  return (*series)[index];
+}
+
+}  // namespace
+
+ReportData collectReport(LogReader& log, const ReportOptions& o) {
+  ReportData d;
+  // Rates over bins of a round width, about 50 over the run (a first pass for the duration).
+  {
+    int64_t first = -1, last = 0;
+    LogReader pass(log.path());
+    while (const lcm::LogEvent* ev = pass.next()) {
+      if (first < 0) first = ev->timestamp;
+      last = ev->timestamp;
+    }
+    const double span_s = (last - first) * 1e-6;
+    for (double w : {0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 300.0}) {
+      d.bin_s = w;
+      if (span_s / w <= 60) break;
+    }
+  }
+  const std::string& px = o.channel_prefix;
+  RunMetrics summary_metrics(o.target_class, o.settle_s);
+  RunMetrics series_metrics(o.target_class, 0.0);
+  std::map<int64_t, int64_t> frame_utime, frame_publish;  // by seq
+  std::map<int64_t, std::pair<int, int>> image_size;      // by seq
+  std::map<int64_t, ptzstereo::object_detections_t> detections;
+  std::map<int64_t, std::array<double, 3>> truth_by_seq;
+  std::vector<ptzstereo::object_pose_t> poses;
+  std::vector<ptzstereo::ptz_setpoint_t> setpoints;
+  std::vector<int64_t> frame_periods_us;
+  int64_t t0 = -1, first_event_us = -1, last_event_us = 0, last_seq = -1, missing = 0;
+  const auto setT0 = [&](int64_t utime) {
+    if (t0 < 0) t0 = utime;
+  };
+  while (const lcm::LogEvent* ev = log.next()) {
+    if (first_event_us < 0) first_event_us = ev->timestamp;
+    last_event_us = ev->timestamp;
+    const size_t bin_index =
+        static_cast<size_t>(std::max<int64_t>(0, ev->timestamp - first_event_us) * 1e-6 / d.bin_s);
+    ++bin(&d.messages_per_bin[ev->channel], bin_index);
+    ++d.channel_messages[ev->channel];
+    const std::string& ch = ev->channel;
+    if (ch == px + channels::kStereoFrame) {
+      ptzstereo::stereo_frame_t f{};
+      if (!decode(*ev, &f, &d.undecodable)) continue;
+      setT0(f.utime);
+      if (last_seq >= 0 && f.seq > last_seq + 1) missing += f.seq - last_seq - 1;
+      if (!frame_utime.empty()) frame_periods_us.push_back(f.utime - frame_utime.rbegin()->second);
+      last_seq = f.seq;
+      frame_utime[f.seq] = f.utime;
+      frame_publish[f.seq] = f.publish_utime;
+      image_size[f.seq] = {f.left.width, f.left.height};
+      summary_metrics.onFrame(f);
+      series_metrics.onFrame(f);
+      bin(&d.frames_missing_cumulative, bin_index) = missing;
+    } else if (ch == px + channels::kPtzState) {
+      ptzstereo::ptz_state_t s{};
+      if (!decode(*ev, &s, &d.undecodable)) continue;
+      setT0(s.utime);
+      d.states.push_back({(s.utime - t0) * 1e-6, sixAxes(s.left, s.right)});
+    } else if (ch == px + channels::kPtzSetpoint) {
+      ptzstereo::ptz_setpoint_t s{};
+      if (!decode(*ev, &s, &d.undecodable)) continue;
+      setT0(s.utime);
+      setpoints.push_back(s);
+      summary_metrics.onSetpoint(s);
+    } else if (ch == px + channels::kSimTruth) {
+      ptzstereo::sim_truth_t t{};
+      if (!decode(*ev, &t, &d.undecodable)) continue;
+      setT0(t.utime);
+      frame_utime.emplace(t.frame_seq, t.utime);
+      summary_metrics.onTruth(t);
+      series_metrics.onTruth(t);
+      for (const auto& obj : t.objects) {
+        if (obj.class_name == o.target_class) {
+          truth_by_seq[t.frame_seq] = {obj.position_m[0], obj.position_m[1], obj.position_m[2]};
+          break;
+        }
+      }
+    } else if (ch == px + channels::kObjectPose) {
+      ptzstereo::object_pose_t p{};
+      if (!decode(*ev, &p, &d.undecodable)) continue;
+      summary_metrics.onPose(p);
+      poses.push_back(p);
+    } else if (ch == px + channels::kObjectDetections) {
+      ptzstereo::object_detections_t m{};
+      if (decode(*ev, &m, &d.undecodable)) detections[m.frame_seq] = m;
+    } else if (ch.rfind(px + "PROCESS_STATUS_", 0) == 0) {
+      ptzstereo::process_status_t s{};
+      if (!decode(*ev, &s, &d.undecodable)) continue;
+      summary_metrics.onStatus(s);
+      for (const auto& c : s.counters) {
+        if (c.name.rfind("dropped", 0) == 0) {
+          bin(&d.dropped_cumulative[s.process + "." + c.name], bin_index) = c.value;
+        }
+      }
+    }
+  }
+  d.breaks = log.describeBreaks();
+  if (log.events() == 0) throw std::runtime_error("the log holds no events");
+  if (t0 < 0) {
+    std::string have;
+    for (const auto& [name, n] : d.channel_messages) have += " " + name;
+    throw std::runtime_error("the log has none of the channels a report needs (" + px +
+                             "STEREO_FRAME, PTZ_STATE, PTZ_SETPOINT, SIM_TRUTH); it has:" + have);
+  }
+  d.duration_s = (last_event_us - first_event_us) * 1e-6;
+  // Cumulative series hold their last value through seconds without a message.
+  const size_t bins = static_cast<size_t>(d.duration_s / d.bin_s) + 1;
+  auto carry = [&](std::vector<int64_t>* v) {
+    v->resize(bins, v->empty() ? 0 : v->back());
+    for (size_t i = 1; i < v->size(); ++i) (*v)[i] = std::max((*v)[i], (*v)[i - 1]);
+  };
+  carry(&d.frames_missing_cumulative);
+  for (auto& [name, v] : d.dropped_cumulative) carry(&v);
+  for (auto& [name, v] : d.messages_per_bin) v.resize(bins, 0);
+
+  for (const auto& s : setpoints) {
+    d.setpoints.push_back({(s.utime - t0) * 1e-6, sixAxes(s.left, s.right)});
+    const double capture_ms = (s.publish_utime - s.utime) / 1000.0;
+    if (capture_ms >= 0 && capture_ms < 60'000) {
+      d.delay_ms.push_back(capture_ms + o.dead_time_s * 1000);
+      d.delay_what = "frame capture -> setpoint publish, plus the plant dead time";
+    } else if (frame_publish.count(s.frame_seq)) {
+      // Lockstep: capture times are sim time; the processing chain is what is measured.
+      d.delay_ms.push_back((s.publish_utime - frame_publish[s.frame_seq]) / 1000.0 +
+                           o.dead_time_s * 1000);
+      d.delay_what = "frame publish -> setpoint publish (lockstep log), plus the plant dead time";
+    }
+  }
+  if (!frame_periods_us.empty()) {
+    std::nth_element(frame_periods_us.begin(),
+                     frame_periods_us.begin() + static_cast<long>(frame_periods_us.size() / 2),
+                     frame_periods_us.end());
+    const int64_t period = frame_periods_us[frame_periods_us.size() / 2];
+    if (period > 0) d.frame_rate_hz = 1e6 / period;
+  }
+  if (d.frame_rate_hz > 0) {
+    d.tau_max_ms =
+        1000 * control::sampledTauMax({o.loop_gain, o.time_constant_s, 0.0}, d.frame_rate_hz);
+  }
+  // Centring: the true target when the simulator's truth is logged, else the detections.
+  if (!series_metrics.centeringByFrame().empty()) {
+    d.centring_source = "SIM_TRUTH";
+    for (const auto& [seq, off] : series_metrics.centeringByFrame()) {
+      if (off.size() == 4 && frame_utime.count(seq)) {
+        d.centring.push_back({(frame_utime[seq] - t0) * 1e-6, {off[0], off[1], off[2], off[3]}});
+      }
+    }
+  }
+  for (const auto& p : poses) {
+    if (p.target_index < 0 || p.target_index >= static_cast<int32_t>(p.objects.size())) continue;
+    const auto& obj = p.objects[static_cast<size_t>(p.target_index)];
+    const double t_s = (p.utime - t0) * 1e-6;
+    ReportData::Position row{
+        t_s, {obj.position_m[0], obj.position_m[1], obj.position_m[2]}, {}, false};
+    if (auto it = truth_by_seq.find(p.frame_seq); it != truth_by_seq.end()) {
+      row.truth_m = it->second;
+      row.has_truth = true;
+    }
+    d.positions.push_back(row);
+    auto det = detections.find(p.frame_seq);
+    auto size = image_size.find(p.frame_seq);
+    if (d.centring_source != "SIM_TRUTH" && det != detections.end() && size != image_size.end() &&
+        obj.left_index >= 0 && obj.left_index < det->second.num_left && obj.right_index >= 0 &&
+        obj.right_index < det->second.num_right) {
+      const double cx = (size->second.first - 1) / 2.0, cy = (size->second.second - 1) / 2.0;
+      const auto& l = det->second.left[static_cast<size_t>(obj.left_index)];
+      const auto& r = det->second.right[static_cast<size_t>(obj.right_index)];
+      d.centring.push_back({t_s,
+                            {l.centroid_x_px - cx, l.centroid_y_px - cy, r.centroid_x_px - cx,
+                             r.centroid_y_px - cy}});
+      d.centring_source = "OBJECT_DETECTIONS";
+    }
+  }
+  d.summary = summary_metrics.summary();
+  return d;
+}
+
+}  // namespace ptz::tools

@@ -1,0 +1,236 @@
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "ptz/transport.hpp"
+#include "tools/report.hpp"
+
+namespace ptz::tools {
+namespace {
+
+std::ofstream open(const std::string& path) {
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write '" + path + "'");
+  f.precision(9);
+  return f;
+}
+
+void writePtz(const std::string& path, const std::vector<ReportData::Ptz>& rows) {
+  auto f = open(path);
+  f << "t_s,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,right_tilt_rad,right_zoom\n";
+  for (const auto& r : rows) {
+    f << r.t_s;
+    for (double v : r.v) f << "," << v;
+    f << "\n";
+  }
+}
+
+// One gnuplot script for every figure: labelled axes with units, legends, a title each.
+std::string gnuplotScript(const ReportData& d, const std::string& dir) {
+  std::ostringstream g;
+  const std::string q = "'" + dir + "/";
+  // Fixed margins: the panels of a figure line up whatever their legends.
+  g << "set terminal pngcairo size 1000,750 font 'DejaVu Sans,11' noenhanced\n"
+    << "set datafile separator ','\nset grid\nset key outside right\n"
+    << "set lmargin at screen 0.08\nset rmargin at screen 0.70\n";
+  if (!d.states.empty() || !d.setpoints.empty()) {
+    g << "set output " << q << "ptz.png'\n"
+      << "set multiplot layout 3,1 title 'Pan, tilt and zoom: state (solid) and setpoint "
+         "(dashed, at the capture time of the frame it answers)'\n"
+      << "set xlabel 'time (s)'\n";
+    const char* names[3] = {"pan (deg)", "tilt (deg)", "zoom (ratio)"};
+    for (int a = 0; a < 3; ++a) {
+      const std::string scale = a < 2 ? "*180/pi" : "";
+      g << "set ylabel '" << names[a] << "'\nplot " << q << "states.csv' using 1:($" << a + 2
+        << scale << ") skip 1 with lines lw 2 lc rgb '#1f77b4' title 'left state', " << q
+        << "states.csv' using 1:($" << a + 5 << scale
+        << ") skip 1 with lines lw 2 lc rgb '#d62728' title 'right state', " << q
+        << "setpoints.csv' using 1:($" << a + 2 << scale
+        << ") skip 1 with lines dt 2 lc rgb '#1f77b4' title 'left setpoint', " << q
+        << "setpoints.csv' using 1:($" << a + 5 << scale
+        << ") skip 1 with lines dt 2 lc rgb '#d62728' title 'right setpoint'\n";
+    }
+    g << "unset multiplot\n";
+  }
+  if (!d.centring.empty()) {
+    g << "set output " << q << "centring.png'\nset title 'Centring error: "
+      << (d.centring_source == "SIM_TRUTH" ? "the true target" : "the detected target")
+      << " to the image centre (" << d.centring_source << ")'\n"
+      << "set xlabel 'time (s)'\nset ylabel 'distance from the image centre (px)'\n"
+      << "plot " << q << "centring.csv' using 1:6 skip 1 with lines lw 2 title 'left camera', " << q
+      << "centring.csv' using 1:7 skip 1 with lines lw 2 title 'right camera'\nunset title\n";
+  }
+  if (!d.positions.empty()) {
+    const bool truth = std::any_of(d.positions.begin(), d.positions.end(),
+                                   [](const auto& p) { return p.has_truth; });
+    g << "set output " << q << "position.png'\n"
+      << "set multiplot layout " << (truth ? 2 : 1) << ",1 title 'Target position in the "
+      << "head frame: estimate (solid)" << (truth ? " and ground truth (dashed)" : "") << "'\n"
+      << "set xlabel 'time (s)'\nset ylabel 'position (m)'\nplot ";
+    const char* axes[3] = {"x", "y", "z"};
+    const char* colours[3] = {"#1f77b4", "#2ca02c", "#d62728"};
+    for (int k = 0; k < 3; ++k) {
+      g << (k ? ", " : "") << q << "position.csv' using 1:" << k + 2
+        << " skip 1 with lines lw 2 lc rgb '" << colours[k] << "' title '" << axes[k]
+        << " estimate'";
+      if (truth) {
+        g << ", " << q << "position.csv' using 1:" << k + 5 << " skip 1 with lines dt 2 lc rgb '"
+          << colours[k] << "' title '" << axes[k] << " truth'";
+      }
+    }
+    g << "\n";
+    if (truth) {
+      g << "set ylabel '3D error (mm)'\nplot " << q
+        << "position.csv' using 1:($8*1000) skip 1 with lines lw 2 title '|estimate - truth|'\n";
+    }
+    g << "unset multiplot\n";
+  }
+  if (!d.delay_ms.empty()) {
+    g << "set output " << q << "delay.png'\nset style fill solid 0.5\n"
+      << "set multiplot layout 2,1 title 'Loop delay: " << d.delay_what << "'\n"
+      << "set xlabel 'delay (ms)'\nset ylabel 'setpoints'\nset xrange [0:*]\n"
+      << "plot " << q << "delay.csv' using 1 skip 1 bins=40 with boxes title 'delay'\n";
+    if (d.tau_max_ms > 0) {
+      g << "set xrange [0:" << 1.2 * d.tau_max_ms << "]\n"
+        << "set arrow from " << d.tau_max_ms << ", graph 0 to " << d.tau_max_ms
+        << ", graph 1 nohead lw 2 lc rgb 'red'\n"
+        << "set label sprintf('tau_max %.0f ms (paper loop, sampled at %.0f Hz)', " << d.tau_max_ms
+        << ", " << d.frame_rate_hz << ") at " << d.tau_max_ms
+        << ", graph 0.9 right offset -1,0 tc rgb 'red'\n"
+        << "plot " << q
+        << "delay.csv' using 1 skip 1 bins=40 with boxes title 'delay, against the limit'\n"
+        << "unset arrow\nunset label\n";
+    }
+    g << "unset multiplot\nset autoscale x\nset style fill empty\n";
+  }
+  if (!d.messages_per_bin.empty()) {
+    g << "set output " << q << "rates.png'\nset multiplot layout 2,1 title 'Message rates by "
+      << "channel (log time, " << d.bin_s << " s bins) and drops'\n"
+      << "set xlabel 'log time (s)'\nset ylabel 'messages/s'\nplot ";
+    int col = 2;
+    for (const auto& [name, v] : d.messages_per_bin) {
+      g << (col > 2 ? ", " : "") << q << "rates.csv' using 1:($" << col << "/" << d.bin_s << ")";
+      g << " skip 1 with steps lw 2 title '" << name << "'";
+      ++col;
+    }
+    g << "\nset ylabel 'dropped (cumulative)'\nset yrange [0:*]\nplot " << q
+      << "drops.csv' using 1:2 skip 1 with steps lw 2 title 'stereo frames missing (seq gaps)'";
+    col = 3;
+    for (const auto& [name, v] : d.dropped_cumulative) {
+      g << ", " << q << "drops.csv' using 1:" << col << " skip 1 with steps lw 2 title '" << name
+        << "'";
+      ++col;
+    }
+    g << "\nunset multiplot\nset autoscale y\n";
+  }
+  return g.str();
+}
+
+std::string reportMarkdown(const ReportData& d, const std::string& log_path,
+                           const std::vector<std::string>& pngs) {
+  std::ostringstream m;
+  m << "# Run report\n\nLog: `" << log_path << "`, " << d.duration_s << " s, frames at "
+    << d.frame_rate_hz << " Hz.\n\n";
+  if (!d.breaks.empty())
+    m << "**The log is broken; this report covers what could be read:**\n\n```\n"
+      << d.breaks << "```\n\n";
+  if (d.undecodable > 0) m << "Undecodable messages: " << d.undecodable << ".\n\n";
+  m << "## Summary (`summary.json`)\n\n```json\n" << d.summary.toJson() << "```\n\n";
+  const std::map<std::string, std::string> captions = {
+      {"ptz.png", "Pan, tilt and zoom of both cameras: state and setpoint"},
+      {"centring.png", "Centring error (" + d.centring_source + ")"},
+      {"position.png", "3D position of the target"},
+      {"delay.png", "Loop delay (" + d.delay_what + ")"},
+      {"rates.png", "Message rates and drops per channel"}};
+  for (const auto& png : pngs) {
+    m << "## " << captions.at(png) << "\n\n![" << captions.at(png) << "](" << png << ")\n\n";
+  }
+  m << "## Messages\n\n| channel | messages |\n|---|---|\n";
+  for (const auto& [name, n] : d.channel_messages) m << "| " << name << " | " << n << " |\n";
+  return m.str();
+}
+
+}  // namespace
+
+std::vector<std::string> writeReport(const ReportData& d, const std::string& log_path,
+                                     const std::string& dir) {
+  ::mkdir(dir.c_str(), 0755);
+  std::vector<std::string> files, pngs;
+  writePtz(dir + "/setpoints.csv", d.setpoints);
+  writePtz(dir + "/states.csv", d.states);
+  files.insert(files.end(), {"setpoints.csv", "states.csv"});
+  if (!d.states.empty() || !d.setpoints.empty()) pngs.push_back("ptz.png");
+  if (!d.centring.empty()) {
+    auto f = open(dir + "/centring.csv");
+    f << "t_s,left_dx_px,left_dy_px,right_dx_px,right_dy_px,left_px,right_px\n";
+    for (const auto& c : d.centring) {
+      f << c.t_s << "," << c.px[0] << "," << c.px[1] << "," << c.px[2] << "," << c.px[3] << ","
+        << std::hypot(c.px[0], c.px[1]) << "," << std::hypot(c.px[2], c.px[3]) << "\n";
+    }
+    files.push_back("centring.csv");
+    pngs.push_back("centring.png");
+  }
+  if (!d.positions.empty()) {
+    auto f = open(dir + "/position.csv");
+    f << "t_s,x_m,y_m,z_m,true_x_m,true_y_m,true_z_m,error_m\n";
+    for (const auto& p : d.positions) {
+      f << p.t_s << "," << p.estimate_m[0] << "," << p.estimate_m[1] << "," << p.estimate_m[2];
+      if (p.has_truth) {
+        const double e = std::hypot(p.estimate_m[0] - p.truth_m[0], p.estimate_m[1] - p.truth_m[1],
+                                    p.estimate_m[2] - p.truth_m[2]);
+        f << "," << p.truth_m[0] << "," << p.truth_m[1] << "," << p.truth_m[2] << "," << e << "\n";
+      } else {
+        f << ",,,,\n";
+      }
+    }
+    files.push_back("position.csv");
+    pngs.push_back("position.png");
+  }
+  if (!d.delay_ms.empty()) {
+    auto f = open(dir + "/delay.csv");
+    f << "delay_ms\n";
+    for (double v : d.delay_ms) f << v << "\n";
+    files.push_back("delay.csv");
+    pngs.push_back("delay.png");
+  }
+  {
+    auto f = open(dir + "/rates.csv");
+    f << "t_s";
+    for (const auto& [name, v] : d.messages_per_bin) f << "," << name;
+    f << "\n";
+    auto g = open(dir + "/drops.csv");
+    g << "t_s,STEREO_FRAME_missing";
+    for (const auto& [name, v] : d.dropped_cumulative) g << "," << name;
+    g << "\n";
+    for (size_t s = 0;
+         s < d.frames_missing_cumulative.size() ||
+         (!d.messages_per_bin.empty() && s < d.messages_per_bin.begin()->second.size());
+         ++s) {
+      f << s * d.bin_s;
+      for (const auto& [name, v] : d.messages_per_bin) f << "," << (s < v.size() ? v[s] : 0);
+      f << "\n";
+      g << s * d.bin_s << ","
+        << (s < d.frames_missing_cumulative.size() ? d.frames_missing_cumulative[s] : 0);
+      for (const auto& [name, v] : d.dropped_cumulative) g << "," << (s < v.size() ? v[s] : 0);
+      g << "\n";
+    }
+    files.insert(files.end(), {"rates.csv", "drops.csv"});
+    pngs.push_back("rates.png");
+  }
+  open(dir + "/plots.gp") << gnuplotScript(d, dir);
+  if (std::system(("gnuplot '" + dir + "/plots.gp'").c_str()) != 0) {
+    throw std::runtime_error("gnuplot failed on '" + dir + "/plots.gp' (is gnuplot installed?)");
+  }
+  open(dir + "/summary.json") << d.summary.toJson();
+  open(dir + "/report.md") << reportMarkdown(d, log_path, pngs);
+  files.insert(files.end(), {"plots.gp", "summary.json", "report.md"});
+  files.insert(files.end(), pngs.begin(), pngs.end());
+  return files;
+}
+
+}  // namespace ptz::tools
