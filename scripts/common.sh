@@ -10,7 +10,7 @@ PTZ_PACKAGES=(
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev pcl-tools
   libgpiod-dev libgtest-dev
   default-jdk-headless libjchart2d-java
-  iproute2 xvfb x11-apps imagemagick gnuplot-nox
+  iproute2 xvfb x11-apps imagemagick xdotool gnuplot-nox
 )
 
 ptz_sudo() {

@@ -120,7 +120,8 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
       if (!decode(*ev, &s, &d.undecodable)) continue;
       summary_metrics.onStatus(s);
       for (const auto& c : s.counters) {
-        if (c.name.rfind("dropped", 0) == 0) {
+        // What was lost or not processed: dropped_* counters and frames a process skipped.
+        if (c.name.rfind("dropped", 0) == 0 || c.name.rfind("frames_skipped", 0) == 0) {
           bin(&d.dropped_cumulative[s.process + "." + c.name], bin_index) = c.value;
         }
       }

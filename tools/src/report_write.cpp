@@ -118,7 +118,10 @@ std::string gnuplotScript(const ReportData& d, const std::string& dir) {
       g << " skip 1 with steps lw 2 title '" << name << "'";
       ++col;
     }
-    g << "\nset ylabel 'dropped (cumulative)'\nset yrange [0:*]\nplot " << q
+    int64_t most = d.frames_missing_cumulative.empty() ? 0 : d.frames_missing_cumulative.back();
+    for (const auto& [name, v] : d.dropped_cumulative) most = std::max(most, v.back());
+    g << "\nset ylabel 'dropped (cumulative)'\nset yrange [0:"
+      << std::max<int64_t>(1, most * 11 / 10 + 1) << "]\nplot " << q
       << "drops.csv' using 1:2 skip 1 with steps lw 2 title 'stereo frames missing (seq gaps)'";
     col = 3;
     for (const auto& [name, v] : d.dropped_cumulative) {
