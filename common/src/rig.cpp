@@ -177,7 +177,8 @@ StereoRig StereoRig::load(const std::string& path) {
   return rig;
 }
 
-void StereoRig::save(const std::string& path) const {
+void StereoRig::save(const std::string& path,
+                     const std::function<void(cv::FileStorage&)>& extra_fields) const {
   cv::FileStorage fs(path, cv::FileStorage::WRITE);
   if (!fs.isOpened()) throw ConfigError("rig file '" + path + "': cannot write");
   fs << "image_width" << left.width << "image_height" << left.height;
@@ -189,6 +190,7 @@ void StereoRig::save(const std::string& path) const {
   cv::eigen2cv(home.R, R);
   cv::eigen2cv(home.T, T);
   fs << "R" << R << "T" << T;
+  if (extra_fields) extra_fields(fs);
 }
 
 StereoRig rigFromParams(const Params& params) {
