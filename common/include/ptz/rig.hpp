@@ -93,7 +93,7 @@ class StereoRig {
   // OpenCV FileStorage YAML; load() throws ConfigError naming the file and the field, and
   // ignores fields it does not know (a calibration's report lives beside the rig's fields).
   static StereoRig load(const std::string& path);
-  // extra_fields writes more top-level fields after the rig's own (ptz-calibrate's report).
+  // extra_fields writes more top-level fields (ptz-calibrate's report) before the rig's own.
   void save(const std::string& path,
             const std::function<void(cv::FileStorage&)>& extra_fields = {}) const;
   // A plausible PTZ rig: VGA, 1x-10x zoom, 0.3 m baseline, mild distortion.
