@@ -107,25 +107,13 @@ TEST(Calibration, MonoMatchesTheBouguetToolboxAnswers) {
 TEST(Calibration, RecoversARandomSimulatedRig) {
   std::mt19937 rng(20261122);
   const ptz::StereoRig truth = ptz::test::randomRig(rng);
-  const std::vector<ptz::CameraView> views = {truth.view(ptz::Side::kLeft, {}),
-                                              truth.view(ptz::Side::kRight, {})};
   ptz::sim::Scene scene;
   scene.chessboard.present = true;
   scene.chessboard.square_m = 0.05;
   ptz::sim::Renderer renderer(scene);
   const BoardSpec board{9, 6, 0.05};
-  std::vector<ViewPair> pairs;
-  for (int i = 0; pairs.size() < 20 && i < 60; ++i) {
-    ASSERT_TRUE(
-        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene.chessboard));
-    ViewPair v{"view" + std::to_string(i) + "_left", "view" + std::to_string(i) + "_right", {}, {}};
-    if (!ptz::test::renderCorners(&renderer, views[0], board, &v.left_px) ||
-        !ptz::test::renderCorners(&renderer, views[1], board, &v.right_px)) {
-      continue;
-    }
-    ptz::perception::alignCornerOrder(v.left_px, &v.right_px);
-    pairs.push_back(v);
-  }
+  const std::vector<ViewPair> pairs =
+      ptz::test::stereoViews(truth, &scene, &renderer, rng, board, 20);
   ASSERT_EQ(pairs.size(), 20u);
   const StereoCalibration c = ptz::perception::calibrateStereo(pairs, board, {640, 480}, {});
   const ptz::StereoRig rig = c.toRig();

@@ -24,7 +24,7 @@ void declare(Params& p) {
   p.add("max_view_error_px", 1.0, "px", "per-view RMS above which a view is an outlier");
   p.add("drop_outliers", false, "recalibrate without the outlier views (else only report them)");
   p.add("min_tilt_deg", 10.0, "deg", "some view must tilt the board at least this much");
-  p.add("refine_intrinsics", false,
+  p.add("refine_intrinsics", true,
         "refine the intrinsics jointly with R, T in the stereo fit (false: keep the mono ones)");
   p.add("rectify_alpha", 0.0, "", "stereoRectify alpha: 0 valid pixels only, 1 all pixels");
 }

@@ -79,4 +79,24 @@ inline bool renderCorners(sim::Renderer* renderer, const CameraView& view,
   return perception::findCorners(bgr, board, corners);
 }
 
+// `count` stereo views of the scene's board at random poses seen by both cameras at home.
+inline std::vector<perception::ViewPair> stereoViews(const StereoRig& rig, sim::Scene* scene,
+                                                     sim::Renderer* renderer, std::mt19937& rng,
+                                                     const perception::BoardSpec& board,
+                                                     size_t count) {
+  const std::vector<CameraView> views = {rig.view(Side::kLeft, {}), rig.view(Side::kRight, {})};
+  std::vector<perception::ViewPair> pairs;
+  for (size_t i = 0; pairs.size() < count && i < 3 * count; ++i) {
+    if (!placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene->chessboard)) break;
+    perception::ViewPair v{
+        "view" + std::to_string(i) + "_left", "view" + std::to_string(i) + "_right", {}, {}};
+    if (renderCorners(renderer, views[0], board, &v.left_px) &&
+        renderCorners(renderer, views[1], board, &v.right_px)) {
+      perception::alignCornerOrder(v.left_px, &v.right_px);
+      pairs.push_back(v);
+    }
+  }
+  return pairs;
+}
+
 }  // namespace ptz::test

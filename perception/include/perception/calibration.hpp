@@ -71,7 +71,7 @@ struct StereoOptions {
   double rectify_alpha = 0;        // cv::stereoRectify's alpha: 0 valid pixels only, 1 all
   // Refine both cameras' intrinsics with R, T in cv::stereoCalibrate (from the mono results);
   // false: keep the mono intrinsics fixed.
-  bool refine_intrinsics = false;
+  bool refine_intrinsics = true;
 };
 
 struct ViewReport {

@@ -1,0 +1,47 @@
+// What a PTZ rig needs beyond a fixed stereo calibration: intrinsics per zoom position (the rig's
+// zoom table) and where the optical centre sits relative to the pan/tilt pivot (the rig's
+// optical_centre_from_pivot_m). No LCM.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+#include "perception/calibration.hpp"
+#include "ptz/rig.hpp"
+
+namespace ptz::perception {
+
+// Board corners seen by one camera at one zoom position (each entry one view).
+struct ZoomViews {
+  double zoom = 1;
+  std::vector<std::vector<cv::Point2f>> corners_px;
+};
+
+// A mono calibration per zoom position, sorted by zoom: the rig's zoom table (f, c and the
+// 5-coefficient distortion per entry). Throws CalibrationError naming the zoom that failed.
+std::vector<ZoomEntry> calibrateZoomTable(const std::vector<ZoomViews>& zooms,
+                                          const BoardSpec& board, cv::Size image_size,
+                                          int min_views = 8);
+
+// One view of a static board by one camera at some pan/tilt; `station` numbers the board's
+// placements (the board must not move between views of one station).
+struct PivotView {
+  int station = 0;
+  std::vector<cv::Point2f> corners_px;
+};
+
+struct PivotEstimate {
+  Eigen::Vector3d optical_centre_from_pivot_m = Eigen::Vector3d::Zero();  // camera frame
+  double residual_rms_m = 0;  // camera centres against the fitted model
+};
+
+// The camera turns about axes through one pivot, so its centre in the board frame is
+// C_i = P_station + R_i o, with R_i the camera's orientation (board frame) at view i: linear in
+// the pivot P and the offset o. Each view's pose comes from cv::solvePnP with `intrinsics`.
+// Needs views at several pans and tilts; throws CalibrationError when o is not observable.
+PivotEstimate estimateOpticalCentreFromPivot(const std::vector<PivotView>& views,
+                                             const BoardSpec& board, const Intrinsics& intrinsics);
+
+}  // namespace ptz::perception
