@@ -1,0 +1,87 @@
+// ptz-calibrate --source lcm as a process: STEREO_FRAMEs of a board at random poses (rendered by
+// the simulator's renderer in this test) in, a rig file out; and a stop before enough views.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <random>
+
+#include "ptz/transport.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+#include "support/board_views.hpp"
+#include "support/child_process.hpp"
+#include "support/lcm_wait.hpp"
+
+namespace {
+
+using ptz::test::ChildProcess;
+
+std::vector<ptzstereo::stereo_frame_t> boardFrames(const ptz::StereoRig& rig, std::mt19937& rng,
+                                                   int count) {
+  ptz::sim::Scene scene;
+  scene.chessboard.present = true;
+  scene.chessboard.square_m = 0.05;
+  ptz::sim::Renderer renderer(scene);
+  const std::vector<ptz::CameraView> views = {rig.view(ptz::Side::kLeft, {}),
+                                              rig.view(ptz::Side::kRight, {})};
+  std::vector<ptzstereo::stereo_frame_t> frames;
+  for (int i = 0; i < count; ++i) {
+    EXPECT_TRUE(
+        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene.chessboard));
+    cv::Mat left, right;
+    renderer.render(views[0], 0, &left);
+    renderer.render(views[1], 0, &right);
+    ptzstereo::stereo_frame_t m{};
+    m.seq = i;
+    m.left = ptz::encodeImage(left, ptzstereo::image_t::ENCODING_JPEG, 95);
+    m.right = ptz::encodeImage(right, ptzstereo::image_t::ENCODING_JPEG, 95);
+    m.left.zoom = m.right.zoom = 1;
+    frames.push_back(m);
+  }
+  return frames;
+}
+
+TEST(CalibrateLive, CalibratesFromStereoFramesAndStopsAtTheTargetCount) {
+  std::mt19937 rng(11);
+  const ptz::StereoRig truth = ptz::test::randomRig(rng);
+  const auto frames = boardFrames(truth, rng, 24);
+  const std::string output = std::string(::testing::TempDir()) + "/ptz_calibrate_live_rig.yaml";
+  std::remove(output.c_str());
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ASSERT_TRUE(lcm.good());
+  ChildProcess tool({PTZ_CALIBRATE_BIN, "--source", "lcm", "--lcm-url", ptz::test::kTestUrl,
+                     "--square-m", "0.05", "--target-views", "12", "--output", output});
+  ASSERT_TRUE(tool.started());
+  // The frames over and over (a queue of one drops what the tool has no time for) until it
+  // has its views and exits.
+  int exit_code = -1;
+  for (size_t i = 0; exit_code < 0 && i < 3000; ++i) {
+    auto frame = frames[i % frames.size()];
+    frame.utime = ptz::wallUtime();
+    lcm.publish(ptz::channels::kStereoFrame, &frame);
+    exit_code = tool.wait(std::chrono::milliseconds(100));
+  }
+  ASSERT_EQ(exit_code, 0);
+  const ptz::StereoRig rig = ptz::StereoRig::load(output);
+  EXPECT_LT(std::abs(rig.baselineM() - truth.baselineM()) / truth.baselineM(), 0.005)
+      << rig.baselineM() << " vs " << truth.baselineM();
+  cv::FileStorage fs(output, cv::FileStorage::READ);
+  EXPECT_EQ(fs["calibration"]["views"].size(), 12u);
+}
+
+TEST(CalibrateLive, StoppedBeforeEnoughViewsSaysSoAndFails) {
+  ChildProcess tool({PTZ_CALIBRATE_BIN, "--source", "lcm", "--lcm-url", ptz::test::kTestUrl,
+                     "--output", std::string(::testing::TempDir()) + "/ptz_calibrate_none.yaml"});
+  ASSERT_TRUE(tool.started());
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  // Up and subscribed once its first status arrives; then SIGTERM with no views kept.
+  bool up = false;
+  lcm::Subscription* sub = lcm.subscribeFunction(
+      "PROCESS_STATUS_PTZ_CALIBRATE",
+      +[](const lcm::ReceiveBuffer*, const std::string&, bool* flag) { *flag = true; }, &up);
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return up; }, std::chrono::seconds(10)));
+  lcm.unsubscribe(sub);
+  EXPECT_EQ(tool.stop(), 2);
+}
+
+}  // namespace
