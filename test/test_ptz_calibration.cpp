@@ -67,10 +67,10 @@ std::vector<ptz::perception::PivotView> pivotViews(const ptz::StereoRig& truth, 
         Eigen::AngleAxisd(x_m, Eigen::Vector3d::UnitY()).toRotationMatrix();
     for (double pan_deg : {-15.0, -7.5, 0.0, 7.5, 15.0}) {
       for (double tilt_deg : {-10.0, 0.0, 10.0}) {
-        const ptz::CameraView view =
-            truth.view(side, {pan_deg * M_PI / 180, tilt_deg * M_PI / 180, 1});
+        const ptz::PtzPose pose{pan_deg * M_PI / 180, tilt_deg * M_PI / 180, 1};
+        const ptz::CameraView view = truth.view(side, pose);
         if (!ptz::test::boardInside(sim->scene.chessboard, view, 20)) continue;
-        ptz::perception::PivotView v{station, {}};
+        ptz::perception::PivotView v{station, {}, pose.pan_rad, pose.tilt_rad};
         if (ptz::test::renderCorners(&sim->renderer, view, sim->board, &v.corners_px)) {
           views.push_back(v);
         }
@@ -100,8 +100,8 @@ TEST(PanTiltKinematics, TriangulationAfterPanningStaysWithinHalfAPercentOfRange)
         estimate.optical_centre_from_pivot_m;
     const Eigen::Vector3d error =
         estimate.optical_centre_from_pivot_m - truth.camera(side).optical_centre_from_pivot_m;
-    std::printf("%s: offset error %.2f mm (residual %.2f mm)\n", ptz::sideName(side),
-                1000 * error.norm(), 1000 * estimate.residual_rms_m);
+    std::printf("%s: offset error %.2f mm (reprojection %.3f px)\n", ptz::sideName(side),
+                1000 * error.norm(), estimate.reprojection_rms_px);
   }
   ptz::StereoRig unmodelled = rig;  // the same calibration with the optical centre on the pivot
   unmodelled.left.optical_centre_from_pivot_m.setZero();

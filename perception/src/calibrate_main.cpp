@@ -4,12 +4,15 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <memory>
+#include <sstream>
 
 #include "perception/calibration.hpp"
 #include "perception/calibration_files.hpp"
 #include "perception/calibration_live.hpp"
+#include "perception/ptz_calibration.hpp"
 #include "ptz/transport.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 
@@ -17,17 +20,26 @@ namespace ptz::perception {
 namespace {
 
 void declare(Params& p) {
+  p.add("mode", "stereo",
+        "stereo: the home calibration; zoom: add the intrinsics at --zoom to rig_file's zoom "
+        "table; pivot: the optical centre's offset from the pan/tilt pivot into rig_file");
+  p.add("rig_file", "", "zoom, pivot: the rig file to extend (written to --output)");
   p.add("source", "files", "files (images_dir or image_list) or lcm (STEREO_FRAME, live)");
-  p.add("images_dir", "", "folder of image pairs <left_prefix>X / <right_prefix>X");
+  p.add("images_dir", "",
+        "folder of image pairs <left_prefix>X / <right_prefix>X (pivot: one folder per board "
+        "station, separated by commas)");
   p.add("left_prefix", "left", "file-name prefix of the left images in images_dir");
   p.add("right_prefix", "right", "file-name prefix of the right images in images_dir");
-  p.add("image_list", "", "text file of 'left_path right_path' lines (instead of images_dir)");
+  p.add("image_list", "",
+        "text file of 'left_path right_path [left_pan_deg left_tilt_deg right_pan_deg "
+        "right_tilt_deg]' lines (instead of images_dir; pivot: the angles refine the estimate, "
+        "one list per board station, separated by commas)");
   p.add("board_cols", 9, "", "inner corners along a board row (squares - 1)");
   p.add("board_rows", 6, "", "inner corners along a board column (squares - 1)");
   p.add("square_m", 0.025, "m", "side of a board square");
   p.add("output", "rig_calibrated.yaml", "rig file to write (StereoRig + calibration report)");
   p.add("camera_info_dir", "", "also write ROS camera_info left.yaml/right.yaml here; empty: no");
-  p.add("zoom", 1.0, "", "zoom position of both cameras in the images (the zoom table entry)");
+  p.add("zoom", 1.0, "", "zoom position of both cameras in the images (their zoom table entry)");
   p.add("min_views", 8, "", "fewest views with the board in both images");
   p.add("max_view_error_px", 1.0, "px", "per-view RMS above which a view is an outlier");
   p.add("drop_outliers", false, "recalibrate without the outlier views (else only report them)");
@@ -89,23 +101,138 @@ void calibrateAndWrite(const Params& p, const std::vector<ViewPair>& views, cv::
   }
 }
 
-int runFiles(const Params& p) {
-  const auto t0 = std::chrono::steady_clock::now();
+// Pairs from an image list (list = true) or a folder.
+DetectedViews detectFiles(const Params& p, const std::string& source, bool list) {
   const BoardSpec board = boardOf(p);
-  std::vector<ImagePair> pairs;
-  if (!p.getString("image_list").empty()) {
-    pairs = pairsFromList(p.getString("image_list"));
-  } else if (!p.getString("images_dir").empty()) {
-    pairs = pairsFromFolder(p.getString("images_dir"), p.getString("left_prefix"),
-                            p.getString("right_prefix"));
-  } else {
+  if (source.empty()) {
     throw ConfigError("give --images-dir FOLDER or --image-list FILE (see ptz-calibrate --help)");
   }
-  const DetectedViews detected = detectPairs(pairs, board);
+  const std::vector<ImagePair> pairs =
+      list ? pairsFromList(source)
+           : pairsFromFolder(source, p.getString("left_prefix"), p.getString("right_prefix"));
+  DetectedViews detected = detectPairs(pairs, board);
   for (const auto& s : detected.skipped) std::printf("skipped: %s\n", s.c_str());
   std::printf("board %s found in both images of %zu of %zu pairs\n", board.text().c_str(),
               detected.views.size(), pairs.size());
-  calibrateAndWrite(p, detected.views, detected.image_size);
+  return detected;
+}
+
+StereoRig rigToExtend(const Params& p, cv::Size image_size) {
+  if (p.getString("rig_file").empty()) {
+    throw ConfigError("--mode " + p.getString("mode") + " needs --rig-file (the home calibration)");
+  }
+  StereoRig rig = StereoRig::load(p.getString("rig_file"));
+  if (rig.left.width != image_size.width || rig.left.height != image_size.height) {
+    throw CalibrationError("rig file '" + p.getString("rig_file") + "' is for " +
+                           std::to_string(rig.left.width) + "x" + std::to_string(rig.left.height) +
+                           " images, these are " + std::to_string(image_size.width) + "x" +
+                           std::to_string(image_size.height));
+  }
+  return rig;
+}
+
+// The intrinsics of each camera at --zoom from its own images, into the rig's zoom tables.
+void runZoom(const Params& p, const DetectedViews& d) {
+  StereoRig rig = rigToExtend(p, d.image_size);
+  const double zoom = p.getDouble("zoom");
+  double rms_px[2];
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    CameraSpec& camera = side == Side::kLeft ? rig.left : rig.right;
+    const ZoomViews views{zoom, side == Side::kLeft ? d.left_px : d.right_px};
+    const MonoCalibration m = calibrateAtZoom(views, boardOf(p), d.image_size,
+                                              zoom > camera.minZoom(), p.getInt("min_views"));
+    setZoomEntry(&camera, {zoom, m.intrinsics()});
+    rms_px[static_cast<int>(side)] = m.rms_px;
+    std::printf("%s at zoom %g: fx %.2f fy %.2f cx %.2f cy %.2f px, RMS %.3f px, %zu views\n",
+                sideName(side), zoom, m.K.at<double>(0, 0), m.K.at<double>(1, 1),
+                m.K.at<double>(0, 2), m.K.at<double>(1, 2), m.rms_px, views.corners_px.size());
+  }
+  // Read before writing: --output may be the rig file itself.
+  const cv::FileStorage previous = openForRead(p.getString("rig_file"), "rig file");
+  rig.save(p.getString("output"), [&](cv::FileStorage& fs) {
+    copyReportFields(previous.root(), fs, {"zoom_calibrations"});
+    fs << "zoom_calibrations"
+       << "[";
+    for (const auto& entry : previous["zoom_calibrations"]) {
+      if (static_cast<double>(entry["zoom"]) != zoom) copyFileNode(fs, "", entry);
+    }
+    fs << "{"
+       << "zoom" << zoom << "date_utc" << utcNow() << "rms_left_px" << rms_px[0] << "rms_right_px"
+       << rms_px[1] << "views_left" << static_cast<int>(d.left_px.size()) << "views_right"
+       << static_cast<int>(d.right_px.size()) << "}";
+    fs << "]";
+  });
+  std::printf("wrote %s\n", p.getString("output").c_str());
+}
+
+// Each camera's optical centre relative to its pivot, from views of a board that stays put
+// while the cameras pan and tilt.
+void runPivot(const Params& p, const std::vector<DetectedViews>& stations) {
+  StereoRig rig = rigToExtend(p, stations.front().image_size);
+  double residual_m[2], reprojection_px[2];
+  int count[2] = {0, 0};
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    CameraSpec& camera = side == Side::kLeft ? rig.left : rig.right;
+    std::vector<PivotView> views;
+    for (size_t station = 0; station < stations.size(); ++station) {
+      const DetectedViews& d = stations[station];
+      const auto& corners = side == Side::kLeft ? d.left_px : d.right_px;
+      const auto& angles = side == Side::kLeft ? d.left_pan_tilt_rad : d.right_pan_tilt_rad;
+      for (size_t i = 0; i < corners.size(); ++i) {
+        views.push_back({static_cast<int>(station), corners[i], angles[i][0], angles[i][1]});
+      }
+    }
+    count[static_cast<int>(side)] = static_cast<int>(views.size());
+    const PivotEstimate e =
+        estimateOpticalCentreFromPivot(views, boardOf(p), camera.intrinsicsAt(p.getDouble("zoom")));
+    camera.optical_centre_from_pivot_m = e.optical_centre_from_pivot_m;
+    residual_m[static_cast<int>(side)] = e.residual_rms_m;
+    reprojection_px[static_cast<int>(side)] = e.reprojection_rms_px;
+    const Eigen::Vector3d& o = e.optical_centre_from_pivot_m;
+    std::printf("%s: optical centre from pivot [%.4f, %.4f, %.4f] m from %zu views; ",
+                sideName(side), o.x(), o.y(), o.z(), views.size());
+    if (std::isfinite(e.reprojection_rms_px)) {
+      std::printf("refined with the pan/tilt angles: reprojection %.3f px\n",
+                  e.reprojection_rms_px);
+    } else {
+      std::printf("no pan/tilt angles (an image list gives them): linear fit, residual %.4f m\n",
+                  e.residual_rms_m);
+    }
+  }
+  const cv::FileStorage previous = openForRead(p.getString("rig_file"), "rig file");
+  rig.save(p.getString("output"), [&](cv::FileStorage& fs) {
+    copyReportFields(previous.root(), fs, {"pivot_calibration"});
+    fs << "pivot_calibration"
+       << "{"
+       << "date_utc" << utcNow() << "residual_left_m" << residual_m[0] << "residual_right_m"
+       << residual_m[1] << "reprojection_left_px" << reprojection_px[0] << "reprojection_right_px"
+       << reprojection_px[1] << "stations" << static_cast<int>(stations.size()) << "views_left"
+       << count[0] << "views_right" << count[1] << "}";
+  });
+  std::printf("wrote %s\n", p.getString("output").c_str());
+}
+
+int runFiles(const Params& p) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::string mode = p.getString("mode");
+  if (mode != "stereo" && mode != "zoom" && mode != "pivot") {
+    throw ConfigError("flag --mode: expected stereo, zoom or pivot, got '" + mode + "'");
+  }
+  const bool list = !p.getString("image_list").empty();
+  const std::string source = list ? p.getString("image_list") : p.getString("images_dir");
+  if (mode == "pivot") {  // one board station per folder or list
+    std::vector<DetectedViews> stations;
+    std::stringstream sources(source);
+    for (std::string one; std::getline(sources, one, ',');) {
+      stations.push_back(detectFiles(p, one, list));
+    }
+    if (stations.empty()) stations.push_back(detectFiles(p, "", list));
+    runPivot(p, stations);
+  } else {
+    const DetectedViews detected = detectFiles(p, source, list);
+    if (mode == "stereo") calibrateAndWrite(p, detected.views, detected.image_size);
+    if (mode == "zoom") runZoom(p, detected);
+  }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("%.2f s\n", s);
   return 0;

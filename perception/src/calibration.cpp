@@ -134,14 +134,14 @@ double meanRectifiedEpipolarPx(const std::vector<ViewPair>& views, const StereoC
   return n ? sum / static_cast<double>(n) : 0;
 }
 
+}  // namespace
+
 std::string utcNow() {
   const std::time_t now = std::time(nullptr);
   char text[32];
   std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&now));
   return text;
 }
-
-}  // namespace
 
 StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const BoardSpec& board,
                                   cv::Size image_size, const StereoOptions& options) {

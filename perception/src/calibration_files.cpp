@@ -3,6 +3,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -69,13 +70,27 @@ std::vector<ImagePair> pairsFromList(const std::string& list_path) {
   for (int number = 1; std::getline(in, line); ++number) {
     line = line.substr(0, line.find('#'));
     std::istringstream words(line);
-    std::string l, r, extra;
+    std::string l, r;
     if (!(words >> l)) continue;
-    if (!(words >> r) || (words >> extra)) {
-      throw CalibrationError("image list '" + list_path + "', line " + std::to_string(number) +
+    const std::string where = "image list '" + list_path + "', line " + std::to_string(number);
+    if (!(words >> r)) {
+      throw CalibrationError(where +
                              ": expected 'left_path right_path' (left/right count mismatch)");
     }
-    pairs.push_back({(base / l).string(), (base / r).string()});
+    ImagePair pair{(base / l).string(), (base / r).string()};
+    std::vector<double> angles_deg;
+    for (double a; words >> a;) angles_deg.push_back(a);
+    if (!words.eof() || (angles_deg.size() != 0 && angles_deg.size() != 4)) {
+      throw CalibrationError(where +
+                             ": after the two paths expect nothing or 'left_pan_deg "
+                             "left_tilt_deg right_pan_deg right_tilt_deg'");
+    }
+    if (angles_deg.size() == 4) {
+      for (double& a : angles_deg) a *= M_PI / 180;
+      pair.left_pan_tilt_rad = {angles_deg[0], angles_deg[1]};
+      pair.right_pan_tilt_rad = {angles_deg[2], angles_deg[3]};
+    }
+    pairs.push_back(pair);
   }
   if (pairs.empty()) throw CalibrationError("image list '" + list_path + "': no pairs");
   return pairs;
@@ -133,6 +148,14 @@ DetectedViews detectPairs(const std::vector<ImagePair>& pairs, const BoardSpec& 
     Found& l = found[2 * i];
     Found& r = found[2 * i + 1];
     any += (l.ok ? 1 : 0) + (r.ok ? 1 : 0);
+    if (l.ok) {
+      out.left_px.push_back(l.corners);
+      out.left_pan_tilt_rad.push_back(pairs[i].left_pan_tilt_rad);
+    }
+    if (r.ok) {
+      out.right_px.push_back(r.corners);
+      out.right_pan_tilt_rad.push_back(pairs[i].right_pan_tilt_rad);
+    }
     if (l.ok && r.ok) {
       alignCornerOrder(l.corners, &r.corners);
       out.views.push_back({pairs[i].left_path, pairs[i].right_path, l.corners, r.corners});

@@ -1,5 +1,6 @@
 // The calibration's output files: the rig file with the report beside the rig's own fields, and
 // ROS camera_info YAML.
+#include <algorithm>
 #include <fstream>
 #include <iomanip>
 
@@ -42,6 +43,29 @@ void saveCalibration(const std::string& path, const StereoRig& rig, const Stereo
   });
 }
 
+void copyFileNode(cv::FileStorage& fs, const std::string& name, const cv::FileNode& node) {
+  if (!name.empty()) fs << name;
+  if (node.isMap() && !node["dt"].empty() && !node["rows"].empty()) {
+    cv::Mat m;
+    node >> m;
+    fs << m;
+  } else if (node.isMap()) {
+    fs << "{";
+    for (const auto& child : node) copyFileNode(fs, child.name(), child);
+    fs << "}";
+  } else if (node.isSeq()) {
+    fs << "[";
+    for (const auto& item : node) copyFileNode(fs, "", item);
+    fs << "]";
+  } else if (node.isInt()) {
+    fs << static_cast<int>(node);
+  } else if (node.isReal()) {
+    fs << static_cast<double>(node);
+  } else {
+    fs << static_cast<std::string>(node);
+  }
+}
+
 namespace {
 
 void writeMatrix(std::ofstream& out, const char* name, const cv::Mat& m) {
@@ -53,6 +77,18 @@ void writeMatrix(std::ofstream& out, const char* name, const cv::Mat& m) {
 }
 
 }  // namespace
+
+void copyReportFields(const cv::FileNode& rig_root, cv::FileStorage& fs,
+                      const std::vector<std::string>& skip) {
+  for (const auto& node : rig_root) {
+    const std::string name = node.name();
+    const bool rig_field = name == "image_width" || name == "image_height" || name == "left" ||
+                           name == "right" || name == "R" || name == "T";
+    if (!rig_field && std::find(skip.begin(), skip.end(), name) == skip.end()) {
+      copyFileNode(fs, name, node);
+    }
+  }
+}
 
 void saveCameraInfo(const std::string& path, const StereoCalibration& c, Side side) {
   // Plain YAML: FileStorage's "%YAML:1.0" header is not valid YAML for ROS's parsers.

@@ -107,9 +107,19 @@ struct StereoCalibration {
 StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const BoardSpec& board,
                                   cv::Size image_size, const StereoOptions& options);
 
+// "2026-11-22T06:30:00Z": the date fields of the reports.
+std::string utcNow();
+
 // The rig file (StereoRig::save, so every process loads it) plus the calibration's fields:
 // E, F, R1, R2, P1, P2, Q, RMS per camera and pair, per-view errors, epipolar error, board, date.
 void saveCalibration(const std::string& path, const StereoRig& rig, const StereoCalibration& c);
+// Copies the fields of a rig file (its root, read before the file is overwritten) that are not
+// the rig's own (a calibration's report) into fs, except those named in `skip`: a rig file
+// updated by a later step keeps them.
+void copyReportFields(const cv::FileNode& rig_root, cv::FileStorage& fs,
+                      const std::vector<std::string>& skip);
+// Writes a node read with FileStorage back (name empty inside a list), matrices as matrices.
+void copyFileNode(cv::FileStorage& fs, const std::string& name, const cv::FileNode& node);
 // ROS camera_info YAML (plumb_bob) of one camera, rectification and projection included.
 void saveCameraInfo(const std::string& path, const StereoCalibration& c, Side side);
 
