@@ -91,13 +91,13 @@ const char* resultName(LiveCollector::Result result) {
     case LiveCollector::Result::kKept:
       return "kept";
     case LiveCollector::Result::kNoBoard:
-      return "no board";
+      return "no_board";
     case LiveCollector::Result::kNotBothImages:
-      return "board in the left image only";
+      return "board_left_only";
     case LiveCollector::Result::kNoNewCoverage:
-      return "no new coverage";
+      return "no_new_coverage";
     case LiveCollector::Result::kOtherSize:
-      return "image size changed";
+      return "image_size_changed";
   }
   return "?";
 }

@@ -46,6 +46,7 @@ class LiveCollector {
   std::vector<ViewCoverage> coverage_;
 };
 
+// "kept", "no_board", ...: the status counters are frames_<name>.
 const char* resultName(LiveCollector::Result result);
 
 }  // namespace ptz::perception
