@@ -139,8 +139,10 @@ void runZoom(const Params& p, const DetectedViews& d) {
   for (Side side : {Side::kLeft, Side::kRight}) {
     CameraSpec& camera = side == Side::kLeft ? rig.left : rig.right;
     const ZoomViews views{zoom, side == Side::kLeft ? d.left_px : d.right_px};
-    const MonoCalibration m = calibrateAtZoom(views, boardOf(p), d.image_size,
-                                              zoom > camera.minZoom(), p.getInt("min_views"));
+    const Intrinsics widest = camera.zoom_table.front().intrinsics;
+    const MonoCalibration m =
+        calibrateAtZoom(views, boardOf(p), d.image_size,
+                        zoom > camera.minZoom() ? &widest : nullptr, p.getInt("min_views"));
     setZoomEntry(&camera, {zoom, m.intrinsics()});
     rms_px[static_cast<int>(side)] = m.rms_px;
     std::printf("%s at zoom %g: fx %.2f fy %.2f cx %.2f cy %.2f px, RMS %.3f px, %zu views\n",

@@ -8,7 +8,7 @@
 namespace ptz::perception {
 
 MonoCalibration calibrateAtZoom(const ZoomViews& z, const BoardSpec& board, cv::Size image_size,
-                                bool zoomed_in, int min_views) {
+                                const Intrinsics* widest, int min_views) {
   std::ostringstream what;
   what << "zoom " << z.zoom;
   if (static_cast<int>(z.corners_px.size()) < min_views) {
@@ -16,18 +16,31 @@ MonoCalibration calibrateAtZoom(const ZoomViews& z, const BoardSpec& board, cv::
                            ", need at least " + std::to_string(min_views));
   }
   const std::vector<std::vector<cv::Point3f>> object(z.corners_px.size(), boardPoints(board));
-  return calibrateMono(object, z.corners_px, image_size, zoomed_in ? cv::CALIB_FIX_K3 : 0,
-                       what.str());
+  if (!widest) return calibrateMono(object, z.corners_px, image_size, 0, what.str());
+  // Zoomed in, the narrow field of view leaves k3 and the principal point poorly determined:
+  // k3 = 0, and c held at the widest zoom's (refined from a first fit with c free).
+  const MonoCalibration free =
+      calibrateMono(object, z.corners_px, image_size, cv::CALIB_FIX_K3, what.str());
+  cv::Mat K = free.K.clone();
+  K.at<double>(0, 2) = widest->cx;
+  K.at<double>(1, 2) = widest->cy;
+  return calibrateMono(
+      object, z.corners_px, image_size,
+      cv::CALIB_USE_INTRINSIC_GUESS | cv::CALIB_FIX_PRINCIPAL_POINT | cv::CALIB_FIX_K3, what.str(),
+      K, free.D);
 }
 
 std::vector<ZoomEntry> calibrateZoomTable(const std::vector<ZoomViews>& zooms,
                                           const BoardSpec& board, cv::Size image_size,
                                           int min_views) {
-  double widest = 1e300;
-  for (const ZoomViews& z : zooms) widest = std::min(widest, z.zoom);
+  std::vector<ZoomViews> sorted = zooms;
+  std::sort(sorted.begin(), sorted.end(),
+            [](const ZoomViews& a, const ZoomViews& b) { return a.zoom < b.zoom; });
   CameraSpec camera;
-  for (const ZoomViews& z : zooms) {
-    const MonoCalibration m = calibrateAtZoom(z, board, image_size, z.zoom > widest, min_views);
+  for (const ZoomViews& z : sorted) {
+    const Intrinsics* widest =
+        camera.zoom_table.empty() ? nullptr : &camera.zoom_table[0].intrinsics;
+    const MonoCalibration m = calibrateAtZoom(z, board, image_size, widest, min_views);
     setZoomEntry(&camera, {z.zoom, m.intrinsics()});
   }
   return camera.zoom_table;

@@ -20,14 +20,15 @@ struct ZoomViews {
   std::vector<std::vector<cv::Point2f>> corners_px;
 };
 
-// A mono calibration at one zoom position. zoomed_in: the field of view is narrower than at the
-// widest zoom, where k3 is no longer separable from k1, k2 (k3 fixed at 0). Throws
-// CalibrationError naming the zoom.
+// A mono calibration at one zoom position. `widest`: the intrinsics at the widest zoom when this
+// one is zoomed in; the narrower field of view then leaves k3 and the principal point poorly
+// determined, so k3 is fixed at 0 and c at the widest zoom's. Throws CalibrationError naming the
+// zoom.
 MonoCalibration calibrateAtZoom(const ZoomViews& views, const BoardSpec& board, cv::Size image_size,
-                                bool zoomed_in, int min_views = 8);
+                                const Intrinsics* widest, int min_views = 8);
 
 // A mono calibration per zoom position, sorted by zoom: the rig's zoom table (f, c and the
-// 5-coefficient distortion per entry).
+// 5-coefficient distortion per entry; c of every entry that of the widest).
 std::vector<ZoomEntry> calibrateZoomTable(const std::vector<ZoomViews>& zooms,
                                           const BoardSpec& board, cv::Size image_size,
                                           int min_views = 8);
