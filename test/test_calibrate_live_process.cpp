@@ -17,23 +17,17 @@ using ptz::test::ChildProcess;
 
 std::vector<ptzstereo::stereo_frame_t> boardFrames(const ptz::StereoRig& rig, std::mt19937& rng,
                                                    int count) {
-  ptz::sim::Scene scene;
-  scene.chessboard.present = true;
-  scene.chessboard.square_m = 0.05;
-  ptz::sim::Renderer renderer(scene);
+  ptz::test::BoardScene sim;
   const std::vector<ptz::CameraView> views = {rig.view(ptz::Side::kLeft, {}),
                                               rig.view(ptz::Side::kRight, {})};
   std::vector<ptzstereo::stereo_frame_t> frames;
   for (int i = 0; i < count; ++i) {
     EXPECT_TRUE(
-        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene.chessboard));
-    cv::Mat left, right;
-    renderer.render(views[0], 0, &left);
-    renderer.render(views[1], 0, &right);
+        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &sim.chessboard()));
     ptzstereo::stereo_frame_t m{};
     m.seq = i;
-    m.left = ptz::encodeImage(left, ptzstereo::image_t::ENCODING_JPEG, 95);
-    m.right = ptz::encodeImage(right, ptzstereo::image_t::ENCODING_JPEG, 95);
+    m.left = ptz::encodeImage(sim.render(views[0]), ptzstereo::image_t::ENCODING_JPEG, 95);
+    m.right = ptz::encodeImage(sim.render(views[1]), ptzstereo::image_t::ENCODING_JPEG, 95);
     m.left.zoom = m.right.zoom = 1;
     frames.push_back(m);
   }

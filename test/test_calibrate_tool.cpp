@@ -10,7 +10,7 @@
 #include <fstream>
 
 #include "ptz/rig.hpp"
-#include "sim/renderer.hpp"
+#include "support/board_views.hpp"
 #include "support/data_dir.hpp"
 
 namespace {
@@ -130,16 +130,12 @@ TEST(CalibrateTool, FrontoParallelViewsAreRefusedAsDegenerate) {
   // Ten fronto-parallel views at different places and distances, rendered by the simulator.
   const std::string dir = freshDir("degenerate");
   const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
-  ptz::sim::Scene scene;
-  scene.chessboard.present = true;
-  scene.chessboard.square_m = 0.05;
-  ptz::sim::Renderer renderer(scene);
+  ptz::test::BoardScene sim;
   for (int i = 0; i < 10; ++i) {
-    scene.chessboard.centre_head_m = {0.1 * (i % 3 - 1), 0.08 * (i % 2), 1.2 + 0.06 * i};
+    sim.chessboard().centre_head_m = {0.1 * (i % 3 - 1), 0.08 * (i % 2), 1.2 + 0.06 * i};
     for (ptz::Side side : {ptz::Side::kLeft, ptz::Side::kRight}) {
-      cv::Mat image;
-      renderer.render(rig.view(side, {}), 0.0, &image);
-      cv::imwrite(dir + "/" + ptz::sideName(side) + std::to_string(10 + i) + ".png", image);
+      cv::imwrite(dir + "/" + ptz::sideName(side) + std::to_string(10 + i) + ".png",
+                  sim.render(rig.view(side, {})));
     }
   }
   const ToolRun run =

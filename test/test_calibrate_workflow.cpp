@@ -32,17 +32,14 @@ std::string freshDir(const std::string& name) {
 class Workflow : public ::testing::Test {
  protected:
   Workflow() {
-    scene_.chessboard.present = true;
-    scene_.chessboard.square_m = 0.05;
     truth_.left.optical_centre_from_pivot_m = {0.002, -0.008, 0.045};
     truth_.right.optical_centre_from_pivot_m = {-0.002, -0.006, 0.03};
   }
   // Writes left<index>.png and right<index>.png of the current board at the given poses.
   void writePair(const std::string& dir, int index, const ptz::PtzPose& pose) {
     for (ptz::Side side : {ptz::Side::kLeft, ptz::Side::kRight}) {
-      cv::Mat image;
-      renderer_.render(truth_.view(side, pose), 0, &image);
-      cv::imwrite(dir + "/" + ptz::sideName(side) + std::to_string(100 + index) + ".png", image);
+      cv::imwrite(dir + "/" + ptz::sideName(side) + std::to_string(100 + index) + ".png",
+                  sim_.render(truth_.view(side, pose)));
     }
   }
   // `count` pairs of the board at random poses that both cameras see at `pose`, out to the image
@@ -54,15 +51,14 @@ class Workflow : public ::testing::Test {
     for (int i = 0; i < count; ++i) {
       ASSERT_TRUE(ptz::test::placeBoard(rng_, views, {0, 0, distance_m},
                                         Eigen::Vector3d(0.6, 0.45, 0.3) * distance_m / 1.3, 0.7,
-                                        &scene_.chessboard));
+                                        &sim_.chessboard()));
       writePair(dir, i, pose);
     }
   }
 
   std::mt19937 rng_{5};
   ptz::StereoRig truth_ = ptz::StereoRig::makeDefault();
-  ptz::sim::Scene scene_;
-  ptz::sim::Renderer renderer_{scene_};
+  ptz::test::BoardScene sim_;
 };
 
 TEST_F(Workflow, HomeThenZoomThenPivotExtendTheRigFile) {
@@ -80,8 +76,8 @@ TEST_F(Workflow, HomeThenZoomThenPivotExtendTheRigFile) {
   // tilt. A list per station gives the angles of each pair.
   for (int station = 0; station < 2; ++station) {
     const double x_m = station == 0 ? -0.25 : 0.25;
-    scene_.chessboard.centre_head_m = {x_m, 0, 1.4};
-    scene_.chessboard.rotation_head_board =
+    sim_.chessboard().centre_head_m = {x_m, 0, 1.4};
+    sim_.chessboard().rotation_head_board =
         Eigen::AngleAxisd(x_m, Eigen::Vector3d::UnitY()).toRotationMatrix();
     std::ofstream list(pivot[station] + "/pairs.txt");
     int index = 0;

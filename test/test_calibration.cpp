@@ -21,12 +21,22 @@ double relativeError(double value, double truth) {
   return std::abs(value - truth) / std::abs(truth);
 }
 
+const BoardSpec kSampleBoard{9, 6, 0.025};
+
+std::string sampleDir() {
+  return ptz::test::dataDir() + "/opencv_stereo_calib";
+}
+
+// The board in OpenCV's 13 sample pairs.
+ptz::perception::DetectedViews detectSample() {
+  return ptz::perception::detectPairs(
+      ptz::perception::pairsFromFolder(sampleDir(), "left", "right"), kSampleBoard);
+}
+
 TEST(Calibration, OpenCvStereoSampleMeetsTheReferenceNumbers) {
-  const std::string dir = ptz::test::dataDir() + "/opencv_stereo_calib";
-  if (!ptz::test::exists(dir)) GTEST_SKIP() << "test data absent: " << dir;
-  const BoardSpec board{9, 6, 0.025};
-  const auto detected =
-      ptz::perception::detectPairs(ptz::perception::pairsFromFolder(dir, "left", "right"), board);
+  if (!ptz::test::exists(sampleDir())) GTEST_SKIP() << "test data absent: " << sampleDir();
+  const BoardSpec board = kSampleBoard;
+  const auto detected = detectSample();
   ASSERT_EQ(detected.views.size(), 13u);
   const StereoCalibration c =
       ptz::perception::calibrateStereo(detected.views, board, detected.image_size, {});
@@ -38,11 +48,9 @@ TEST(Calibration, OpenCvStereoSampleMeetsTheReferenceNumbers) {
 }
 
 TEST(Calibration, DropsOutlierViewsWhenAskedAndSaysWhy) {
-  const std::string dir = ptz::test::dataDir() + "/opencv_stereo_calib";
-  if (!ptz::test::exists(dir)) GTEST_SKIP() << "test data absent: " << dir;
-  const BoardSpec board{9, 6, 0.025};
-  const auto detected =
-      ptz::perception::detectPairs(ptz::perception::pairsFromFolder(dir, "left", "right"), board);
+  if (!ptz::test::exists(sampleDir())) GTEST_SKIP() << "test data absent: " << sampleDir();
+  const BoardSpec board = kSampleBoard;
+  const auto detected = detectSample();
   ptz::perception::StereoOptions options;
   options.max_view_error_px = 0.5;  // below the worst views of this set
   const StereoCalibration kept =
@@ -107,13 +115,9 @@ TEST(Calibration, MonoMatchesTheBouguetToolboxAnswers) {
 TEST(Calibration, RecoversARandomSimulatedRig) {
   std::mt19937 rng(20261122);
   const ptz::StereoRig truth = ptz::test::randomRig(rng);
-  ptz::sim::Scene scene;
-  scene.chessboard.present = true;
-  scene.chessboard.square_m = 0.05;
-  ptz::sim::Renderer renderer(scene);
-  const BoardSpec board{9, 6, 0.05};
-  const std::vector<ViewPair> pairs =
-      ptz::test::stereoViews(truth, &scene, &renderer, rng, board, 20);
+  ptz::test::BoardScene sim;
+  const BoardSpec board = sim.board;
+  const std::vector<ViewPair> pairs = ptz::test::stereoViews(truth, &sim, rng, 20);
   ASSERT_EQ(pairs.size(), 20u);
   const StereoCalibration c = ptz::perception::calibrateStereo(pairs, board, {640, 480}, {});
   const ptz::StereoRig rig = c.toRig();

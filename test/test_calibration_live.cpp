@@ -35,38 +35,33 @@ TEST(CalibrationCoverage, MeasuresPositionSizeAndSkewLikeRos) {
 TEST(LiveCollector, KeepsOnlyViewsThatAddCoverageAndCalibratesFromThem) {
   std::mt19937 rng(7);
   const ptz::StereoRig truth = ptz::test::randomRig(rng);
-  ptz::sim::Scene scene;
-  scene.chessboard.present = true;
-  scene.chessboard.square_m = 0.05;
-  ptz::sim::Renderer renderer(scene);
-  const BoardSpec board{9, 6, 0.05};
+  ptz::test::BoardScene sim;
+  ptz::sim::Chessboard& chessboard = sim.chessboard();
+  const BoardSpec board = sim.board;
   const std::vector<ptz::CameraView> views = {truth.view(ptz::Side::kLeft, {}),
                                               truth.view(ptz::Side::kRight, {})};
   LiveCollector collector(board);
   std::map<LiveCollector::Result, int> results;
   auto offer = [&](const std::string& name) {
-    cv::Mat left, right;
-    renderer.render(views[0], 0, &left);
-    renderer.render(views[1], 0, &right);
-    const auto r = collector.offer(left, right, name);
+    const auto r = collector.offer(sim.render(views[0]), sim.render(views[1]), name);
     ++results[r];
     return r;
   };
   // No board in view; then the board where only the left camera sees it.
-  scene.chessboard.centre_head_m = {0, 0, -2};
+  chessboard.centre_head_m = {0, 0, -2};
   EXPECT_EQ(offer("no board"), LiveCollector::Result::kNoBoard);
-  scene.chessboard.rotation_head_board.setIdentity();
+  chessboard.rotation_head_board.setIdentity();
   for (double x = -1; x < 0; x += 0.01) {  // the right camera sits at +x: move the board left
-    scene.chessboard.centre_head_m = {x, 0, 1.0};
-    if (ptz::test::boardInside(scene.chessboard, views[0], 5)) break;
+    chessboard.centre_head_m = {x, 0, 1.0};
+    if (ptz::test::boardInside(chessboard, views[0], 5)) break;
   }
-  ASSERT_TRUE(ptz::test::boardInside(scene.chessboard, views[0], 5));
-  ASSERT_FALSE(ptz::test::boardInside(scene.chessboard, views[1], 0));
+  ASSERT_TRUE(ptz::test::boardInside(chessboard, views[0], 5));
+  ASSERT_FALSE(ptz::test::boardInside(chessboard, views[1], 0));
   EXPECT_EQ(offer("left only"), LiveCollector::Result::kNotBothImages);
   // A stream of random poses, each shown twice (a still board): the repeat adds nothing.
   for (int i = 0; collector.views().size() < 20 && i < 200; ++i) {
     ASSERT_TRUE(
-        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene.chessboard));
+        ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &chessboard));
     if (offer("frame " + std::to_string(i)) == LiveCollector::Result::kKept) {
       EXPECT_EQ(offer("frame " + std::to_string(i) + " again"),
                 LiveCollector::Result::kNoNewCoverage);

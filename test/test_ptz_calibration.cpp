@@ -12,15 +12,7 @@ namespace {
 
 using ptz::perception::BoardSpec;
 
-struct SimBoard {
-  ptz::sim::Scene scene;
-  ptz::sim::Renderer renderer{scene};
-  BoardSpec board{9, 6, 0.05};
-  SimBoard() {
-    scene.chessboard.present = true;
-    scene.chessboard.square_m = board.square_m;
-  }
-};
+using SimBoard = ptz::test::BoardScene;
 
 TEST(ZoomTable, InterpolatesFocalLengthWithinOnePercentBetweenCalibratedZooms) {
   std::mt19937 rng(4);
@@ -34,9 +26,9 @@ TEST(ZoomTable, InterpolatesFocalLengthWithinOnePercentBetweenCalibratedZooms) {
     for (int i = 0; z.corners_px.size() < 12 && i < 40; ++i) {
       ASSERT_TRUE(ptz::test::placeBoard(rng, {view}, {0, 0, 1.1 * zoom},
                                         Eigen::Vector3d(0.3, 0.2, 0.25) * zoom, 0.8,
-                                        &sim.scene.chessboard));
+                                        &sim.chessboard()));
       std::vector<cv::Point2f> corners;
-      if (ptz::test::renderCorners(&sim.renderer, view, sim.board, &corners)) {
+      if (sim.corners(view, &corners)) {
         z.corners_px.push_back(corners);
       }
     }
@@ -62,16 +54,16 @@ std::vector<ptz::perception::PivotView> pivotViews(const ptz::StereoRig& truth, 
   std::vector<ptz::perception::PivotView> views;
   int station = 0;
   for (double x_m : {-0.25, 0.25}) {
-    sim->scene.chessboard.centre_head_m = {x_m, 0.0, 1.4};
-    sim->scene.chessboard.rotation_head_board =
+    sim->chessboard().centre_head_m = {x_m, 0.0, 1.4};
+    sim->chessboard().rotation_head_board =
         Eigen::AngleAxisd(x_m, Eigen::Vector3d::UnitY()).toRotationMatrix();
     for (double pan_deg : {-15.0, -7.5, 0.0, 7.5, 15.0}) {
       for (double tilt_deg : {-10.0, 0.0, 10.0}) {
         const ptz::PtzPose pose{pan_deg * M_PI / 180, tilt_deg * M_PI / 180, 1};
         const ptz::CameraView view = truth.view(side, pose);
-        if (!ptz::test::boardInside(sim->scene.chessboard, view, 20)) continue;
+        if (!ptz::test::boardInside(sim->chessboard(), view, 20)) continue;
         ptz::perception::PivotView v{station, {}, pose.pan_rad, pose.tilt_rad};
-        if (ptz::test::renderCorners(&sim->renderer, view, sim->board, &v.corners_px)) {
+        if (sim->corners(view, &v.corners_px)) {
           views.push_back(v);
         }
       }
@@ -88,7 +80,7 @@ TEST(PanTiltKinematics, TriangulationAfterPanningStaysWithinHalfAPercentOfRange)
   truth.right.optical_centre_from_pivot_m = {-0.003, -0.01, 0.035};
   SimBoard sim;
   // Home calibration, then the pivot offset of each camera with the calibrated intrinsics.
-  const auto pairs = ptz::test::stereoViews(truth, &sim.scene, &sim.renderer, rng, sim.board, 20);
+  const auto pairs = ptz::test::stereoViews(truth, &sim, rng, 20);
   ASSERT_EQ(pairs.size(), 20u);
   ptz::StereoRig rig = ptz::perception::calibrateStereo(pairs, sim.board, {640, 480}, {}).toRig();
   for (ptz::Side side : {ptz::Side::kLeft, ptz::Side::kRight}) {

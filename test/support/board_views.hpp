@@ -71,27 +71,37 @@ inline bool placeBoard(std::mt19937& rng, const std::vector<CameraView>& views,
   return false;
 }
 
-// Renders the scene's board in the view and finds its corners.
-inline bool renderCorners(sim::Renderer* renderer, const CameraView& view,
-                          const perception::BoardSpec& board, std::vector<cv::Point2f>* corners) {
-  cv::Mat bgr;
-  renderer->render(view, 0.0, &bgr);
-  return perception::findCorners(bgr, board, corners);
-}
+// A scene with only the calibration board (9x6 inner corners, 5 cm squares) and its renderer.
+struct BoardScene {
+  sim::Scene scene;
+  sim::Renderer renderer{scene};
+  perception::BoardSpec board{9, 6, 0.05};
+  BoardScene() {
+    scene.chessboard.present = true;
+    scene.chessboard.square_m = board.square_m;
+  }
+  sim::Chessboard& chessboard() { return scene.chessboard; }
+  cv::Mat render(const CameraView& view) {
+    cv::Mat bgr;
+    renderer.render(view, 0.0, &bgr);
+    return bgr;
+  }
+  // Renders the board in the view and finds its corners.
+  bool corners(const CameraView& view, std::vector<cv::Point2f>* corners_px) {
+    return perception::findCorners(render(view), board, corners_px);
+  }
+};
 
-// `count` stereo views of the scene's board at random poses seen by both cameras at home.
-inline std::vector<perception::ViewPair> stereoViews(const StereoRig& rig, sim::Scene* scene,
-                                                     sim::Renderer* renderer, std::mt19937& rng,
-                                                     const perception::BoardSpec& board,
-                                                     size_t count) {
+// `count` stereo views of the board at random poses seen by both cameras at home.
+inline std::vector<perception::ViewPair> stereoViews(const StereoRig& rig, BoardScene* sim,
+                                                     std::mt19937& rng, size_t count) {
   const std::vector<CameraView> views = {rig.view(Side::kLeft, {}), rig.view(Side::kRight, {})};
   std::vector<perception::ViewPair> pairs;
   for (size_t i = 0; pairs.size() < count && i < 3 * count; ++i) {
-    if (!placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &scene->chessboard)) break;
+    if (!placeBoard(rng, views, {0, 0, 1.3}, {0.35, 0.25, 0.3}, 0.7, &sim->chessboard())) break;
     perception::ViewPair v{
         "view" + std::to_string(i) + "_left", "view" + std::to_string(i) + "_right", {}, {}};
-    if (renderCorners(renderer, views[0], board, &v.left_px) &&
-        renderCorners(renderer, views[1], board, &v.right_px)) {
+    if (sim->corners(views[0], &v.left_px) && sim->corners(views[1], &v.right_px)) {
       perception::alignCornerOrder(v.left_px, &v.right_px);
       pairs.push_back(v);
     }
