@@ -12,7 +12,7 @@
 #include "perception/calibration.hpp"
 #include "perception/calibration_files.hpp"
 #include "perception/calibration_live.hpp"
-#include "perception/ptz_calibration.hpp"
+#include "perception/calibration_steps.hpp"
 #include "ptz/transport.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 
@@ -117,101 +117,29 @@ DetectedViews detectFiles(const Params& p, const std::string& source, bool list)
   return detected;
 }
 
-StereoRig rigToExtend(const Params& p, cv::Size image_size) {
+std::string rigFileToExtend(const Params& p) {
   if (p.getString("rig_file").empty()) {
     throw ConfigError("--mode " + p.getString("mode") + " needs --rig-file (the home calibration)");
   }
-  StereoRig rig = StereoRig::load(p.getString("rig_file"));
-  if (rig.left.width != image_size.width || rig.left.height != image_size.height) {
-    throw CalibrationError("rig file '" + p.getString("rig_file") + "' is for " +
-                           std::to_string(rig.left.width) + "x" + std::to_string(rig.left.height) +
-                           " images, these are " + std::to_string(image_size.width) + "x" +
-                           std::to_string(image_size.height));
-  }
-  return rig;
+  return p.getString("rig_file");
 }
 
-// The intrinsics of each camera at --zoom from its own images, into the rig's zoom tables.
-void runZoom(const Params& p, const DetectedViews& d) {
-  StereoRig rig = rigToExtend(p, d.image_size);
-  const double zoom = p.getDouble("zoom");
-  double rms_px[2];
-  for (Side side : {Side::kLeft, Side::kRight}) {
-    CameraSpec& camera = side == Side::kLeft ? rig.left : rig.right;
-    const ZoomViews views{zoom, side == Side::kLeft ? d.left_px : d.right_px};
-    const Intrinsics widest = camera.zoom_table.front().intrinsics;
-    const MonoCalibration m =
-        calibrateAtZoom(views, boardOf(p), d.image_size,
-                        zoom > camera.minZoom() ? &widest : nullptr, p.getInt("min_views"));
-    setZoomEntry(&camera, {zoom, m.intrinsics()});
-    rms_px[static_cast<int>(side)] = m.rms_px;
-    std::printf("%s at zoom %g: fx %.2f fy %.2f cx %.2f cy %.2f px, RMS %.3f px, %zu views\n",
-                sideName(side), zoom, m.K.at<double>(0, 0), m.K.at<double>(1, 1),
-                m.K.at<double>(0, 2), m.K.at<double>(1, 2), m.rms_px, views.corners_px.size());
-  }
-  // Read before writing: --output may be the rig file itself.
-  const cv::FileStorage previous = openForRead(p.getString("rig_file"), "rig file");
-  rig.save(p.getString("output"), [&](cv::FileStorage& fs) {
-    copyReportFields(previous.root(), fs, {"zoom_calibrations"});
-    fs << "zoom_calibrations"
-       << "[";
-    for (const auto& entry : previous["zoom_calibrations"]) {
-      if (static_cast<double>(entry["zoom"]) != zoom) copyFileNode(fs, "", entry);
-    }
-    fs << "{"
-       << "zoom" << zoom << "date_utc" << utcNow() << "rms_left_px" << rms_px[0] << "rms_right_px"
-       << rms_px[1] << "views_left" << static_cast<int>(d.left_px.size()) << "views_right"
-       << static_cast<int>(d.right_px.size()) << "}";
-    fs << "]";
-  });
-  std::printf("wrote %s\n", p.getString("output").c_str());
+void printZoom(double zoom, Side side, const MonoCalibration& m) {
+  std::printf("%s at zoom %g: fx %.2f fy %.2f cx %.2f cy %.2f px, RMS %.3f px, %zu views\n",
+              sideName(side), zoom, m.K.at<double>(0, 0), m.K.at<double>(1, 1),
+              m.K.at<double>(0, 2), m.K.at<double>(1, 2), m.rms_px, m.view_rms_px.size());
 }
 
-// Each camera's optical centre relative to its pivot, from views of a board that stays put
-// while the cameras pan and tilt.
-void runPivot(const Params& p, const std::vector<DetectedViews>& stations) {
-  StereoRig rig = rigToExtend(p, stations.front().image_size);
-  double residual_m[2], reprojection_px[2];
-  int count[2] = {0, 0};
-  for (Side side : {Side::kLeft, Side::kRight}) {
-    CameraSpec& camera = side == Side::kLeft ? rig.left : rig.right;
-    std::vector<PivotView> views;
-    for (size_t station = 0; station < stations.size(); ++station) {
-      const DetectedViews& d = stations[station];
-      const auto& corners = side == Side::kLeft ? d.left_px : d.right_px;
-      const auto& angles = side == Side::kLeft ? d.left_pan_tilt_rad : d.right_pan_tilt_rad;
-      for (size_t i = 0; i < corners.size(); ++i) {
-        views.push_back({static_cast<int>(station), corners[i], angles[i][0], angles[i][1]});
-      }
-    }
-    count[static_cast<int>(side)] = static_cast<int>(views.size());
-    const PivotEstimate e =
-        estimateOpticalCentreFromPivot(views, boardOf(p), camera.intrinsicsAt(p.getDouble("zoom")));
-    camera.optical_centre_from_pivot_m = e.optical_centre_from_pivot_m;
-    residual_m[static_cast<int>(side)] = e.residual_rms_m;
-    reprojection_px[static_cast<int>(side)] = e.reprojection_rms_px;
-    const Eigen::Vector3d& o = e.optical_centre_from_pivot_m;
-    std::printf("%s: optical centre from pivot [%.4f, %.4f, %.4f] m from %zu views; ",
-                sideName(side), o.x(), o.y(), o.z(), views.size());
-    if (std::isfinite(e.reprojection_rms_px)) {
-      std::printf("refined with the pan/tilt angles: reprojection %.3f px\n",
-                  e.reprojection_rms_px);
-    } else {
-      std::printf("no pan/tilt angles (an image list gives them): linear fit, residual %.4f m\n",
-                  e.residual_rms_m);
-    }
+void printPivot(Side side, const PivotEstimate& e, int views) {
+  const Eigen::Vector3d& o = e.optical_centre_from_pivot_m;
+  std::printf("%s: optical centre from pivot [%.4f, %.4f, %.4f] m from %d views; ", sideName(side),
+              o.x(), o.y(), o.z(), views);
+  if (std::isfinite(e.reprojection_rms_px)) {
+    std::printf("refined with the pan/tilt angles: reprojection %.3f px\n", e.reprojection_rms_px);
+  } else {
+    std::printf("no pan/tilt angles (an image list gives them): linear fit, residual %.4f m\n",
+                e.residual_rms_m);
   }
-  const cv::FileStorage previous = openForRead(p.getString("rig_file"), "rig file");
-  rig.save(p.getString("output"), [&](cv::FileStorage& fs) {
-    copyReportFields(previous.root(), fs, {"pivot_calibration"});
-    fs << "pivot_calibration"
-       << "{"
-       << "date_utc" << utcNow() << "residual_left_m" << residual_m[0] << "residual_right_m"
-       << residual_m[1] << "reprojection_left_px" << reprojection_px[0] << "reprojection_right_px"
-       << reprojection_px[1] << "stations" << static_cast<int>(stations.size()) << "views_left"
-       << count[0] << "views_right" << count[1] << "}";
-  });
-  std::printf("wrote %s\n", p.getString("output").c_str());
 }
 
 int runFiles(const Params& p) {
@@ -220,6 +148,7 @@ int runFiles(const Params& p) {
   if (mode != "stereo" && mode != "zoom" && mode != "pivot") {
     throw ConfigError("flag --mode: expected stereo, zoom or pivot, got '" + mode + "'");
   }
+  if (mode != "stereo") rigFileToExtend(p);  // before the slow part
   const bool list = !p.getString("image_list").empty();
   const std::string source = list ? p.getString("image_list") : p.getString("images_dir");
   if (mode == "pivot") {  // one board station per folder or list
@@ -229,12 +158,22 @@ int runFiles(const Params& p) {
       stations.push_back(detectFiles(p, one, list));
     }
     if (stations.empty()) stations.push_back(detectFiles(p, "", list));
-    runPivot(p, stations);
+    const PivotStep step = setPivotOffsets(rigFileToExtend(p), p.getString("output"),
+                                           p.getDouble("zoom"), stations, boardOf(p));
+    printPivot(Side::kLeft, step.left, step.left_views);
+    printPivot(Side::kRight, step.right, step.right_views);
   } else {
     const DetectedViews detected = detectFiles(p, source, list);
     if (mode == "stereo") calibrateAndWrite(p, detected.views, detected.image_size);
-    if (mode == "zoom") runZoom(p, detected);
+    if (mode == "zoom") {
+      const double zoom = p.getDouble("zoom");
+      const ZoomStep step = addZoomEntry(rigFileToExtend(p), p.getString("output"), zoom, detected,
+                                         boardOf(p), p.getInt("min_views"));
+      printZoom(zoom, Side::kLeft, step.left);
+      printZoom(zoom, Side::kRight, step.right);
+    }
   }
+  if (mode != "stereo") std::printf("wrote %s\n", p.getString("output").c_str());
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("%.2f s\n", s);
   return 0;
