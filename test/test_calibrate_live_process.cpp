@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <map>
 #include <random>
 
 #include "ptz/transport.hpp"
+#include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "support/board_views.hpp"
 #include "support/child_process.hpp"
@@ -62,19 +64,34 @@ TEST(CalibrateLive, CalibratesFromStereoFramesAndStopsAtTheTargetCount) {
   EXPECT_EQ(fs["calibration"]["views"].size(), 12u);
 }
 
-TEST(CalibrateLive, StoppedBeforeEnoughViewsSaysSoAndFails) {
+// Frames with the cameras panned are not used (the stereo calibration holds at home); stopped
+// with no views kept, the tool says so and fails.
+TEST(CalibrateLive, IgnoresFramesAwayFromHomeAndFailsWhenStoppedWithTooFewViews) {
+  std::mt19937 rng(12);
+  auto frames = boardFrames(ptz::StereoRig::makeDefault(), rng, 4);
+  for (auto& f : frames) f.left.pan_rad = 0.1;
   ChildProcess tool({PTZ_CALIBRATE_BIN, "--source", "lcm", "--lcm-url", ptz::test::kTestUrl,
-                     "--output", std::string(::testing::TempDir()) + "/ptz_calibrate_none.yaml"});
+                     "--status-period-s", "0.2", "--output",
+                     std::string(::testing::TempDir()) + "/ptz_calibrate_none.yaml"});
   ASSERT_TRUE(tool.started());
   lcm::LCM lcm(ptz::test::kTestUrl);
-  // Up and subscribed once its first status arrives; then SIGTERM with no views kept.
-  bool up = false;
-  lcm::Subscription* sub = lcm.subscribeFunction(
+  std::map<std::string, int64_t> counters;
+  lcm.subscribeFunction(
       "PROCESS_STATUS_PTZ_CALIBRATE",
-      +[](const lcm::ReceiveBuffer*, const std::string&, bool* flag) { *flag = true; }, &up);
-  ASSERT_TRUE(ptz::test::handleUntil(
-      lcm, [&] { return up; }, std::chrono::seconds(10)));
-  lcm.unsubscribe(sub);
+      +[](const lcm::ReceiveBuffer* rbuf, const std::string&, std::map<std::string, int64_t>* out) {
+        ptzstereo::process_status_t m;
+        if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return;
+        for (const auto& c : m.counters) (*out)[c.name] = c.value;
+      },
+      &counters);
+  for (size_t i = 0; counters["dropped_not_at_home"] < 3 && i < 300; ++i) {
+    auto frame = frames[i % frames.size()];
+    frame.utime = ptz::wallUtime();
+    lcm.publish(ptz::channels::kStereoFrame, &frame);
+    lcm.handleTimeout(100);
+  }
+  EXPECT_GE(counters["dropped_not_at_home"], 3);
+  EXPECT_EQ(counters["frames_kept"], 0);
   EXPECT_EQ(tool.stop(), 2);
 }
 

@@ -50,6 +50,8 @@ void declare(Params& p) {
   p.add("target_views", 20, "", "lcm: stop after keeping this many views (or on SIGINT)");
   p.add("min_coverage_distance", 0.2, "",
         "lcm: L1 distance in (x, y, size, skew) a view needs from every kept one");
+  p.add("home_tolerance_rad", 0.002, "rad",
+        "lcm: frames whose pan or tilt is further from 0 are not used");
   p.add("save_views_dir", "", "lcm: also write the kept views as leftNNN.png/rightNNN.png here");
   addTransportParams(p);
 }
@@ -186,11 +188,24 @@ int runLive(const Params& p, lcm::LCM& lcm) {
   const std::string ch = channel(p, channels::kStereoFrame),
                     save_dir = p.getString("save_views_dir");
   RateLimitedLog log;
+  const double zoom = p.getDouble("zoom");
   // A queue of one: the board search takes longer than a frame period; work on the newest.
   SafeSubscription<ptzstereo::stereo_frame_t> frames(
       lcm, ch, status,
       [&](const std::string&, const ptzstereo::stereo_frame_t& m) {
         status.countIn(ch, (wallUtime() - m.utime) / 1000.0);
+        // The stereo calibration holds at home and at one zoom: a view taken elsewhere would
+        // mix in the kinematics.
+        const double tolerance = p.getDouble("home_tolerance_rad");
+        if (std::abs(m.left.pan_rad) > tolerance || std::abs(m.left.tilt_rad) > tolerance ||
+            std::abs(m.right.pan_rad) > tolerance || std::abs(m.right.tilt_rad) > tolerance ||
+            std::abs(m.left.zoom - zoom) > 1e-3 || std::abs(m.right.zoom - zoom) > 1e-3) {
+          status.countDropped(ch, "not_at_home");
+          log.warn("not_at_home", "ptz-calibrate: dropped frame " + std::to_string(m.seq) +
+                                      ": cameras not at pan = tilt = 0 and zoom " +
+                                      std::to_string(zoom) + " (home_tolerance_rad, --zoom)");
+          return;
+        }
         cv::Mat left, right;
         std::string error;
         if (!decodeImage(m.left, &left, &error) || !decodeImage(m.right, &right, &error)) {

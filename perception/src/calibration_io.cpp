@@ -19,8 +19,10 @@ void saveCalibration(const std::string& path, const StereoRig& rig, const Stereo
        << "{"
        << "inner_cols" << c.board.inner_cols << "inner_rows" << c.board.inner_rows << "square_m"
        << c.board.square_m << "}";
-    fs << "rms_left_px" << c.left.rms_px << "rms_right_px" << c.right.rms_px << "rms_stereo_px"
-       << c.stereo_rms_px << "mean_rectified_epipolar_px" << c.rectified_epipolar_px;
+    // Mono RMS: each camera alone, before the stereo fit refines the intrinsics.
+    fs << "mono_rms_left_px" << c.left.rms_px << "mono_rms_right_px" << c.right.rms_px
+       << "rms_stereo_px" << c.stereo_rms_px << "mean_rectified_epipolar_px"
+       << c.rectified_epipolar_px;
     fs << "views"
        << "[";
     for (size_t i = 0; i < c.views.size(); ++i) {
