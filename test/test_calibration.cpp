@@ -106,9 +106,14 @@ TEST(Calibration, MonoMatchesTheBouguetToolboxAnswers) {
   EXPECT_LT(relativeError(k.fy, fy), 0.001) << k.fy << " vs " << fy;
   EXPECT_LT(relativeError(k.cx, cx), 0.001) << k.cx << " vs " << cx;
   EXPECT_LT(relativeError(k.cy, cy), 0.001) << k.cy << " vs " << cy;
+  double worst_kc = 0;
   for (size_t i = 0; i < 4; ++i) {
     EXPECT_LT(relativeError(k.distortion[i], kc[i]), 0.01) << "kc[" << i << "] " << k.distortion[i];
+    worst_kc = std::max(worst_kc, relativeError(k.distortion[i], kc[i]));
   }
+  std::printf("calib1.dat: fx %.5f %%, fy %.5f %%, cx %.5f %%, cy %.5f %%, worst kc %.4f %%\n",
+              100 * relativeError(k.fx, fx), 100 * relativeError(k.fy, fy),
+              100 * relativeError(k.cx, cx), 100 * relativeError(k.cy, cy), 100 * worst_kc);
 }
 
 // 20 views of a rig the test draws at random, rendered by the simulator.
