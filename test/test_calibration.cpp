@@ -76,6 +76,15 @@ TEST(Calibration, DropsOutlierViewsWhenAskedAndSaysWhy) {
   for (const auto& v : c.views) {
     EXPECT_EQ(std::count(worse.begin(), worse.end(), v.left_name), 0) << v.left_name;
   }
+
+  options.max_view_error_px = 0.01;  // every view an outlier: nothing left to calibrate with
+  try {
+    ptz::perception::calibrateStereo(detected.views, board, detected.image_size, options);
+    ADD_FAILURE() << "dropped every view and still calibrated";
+  } catch (const ptz::perception::CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("would leave 0, fewer than min_views"), std::string::npos)
+        << e.what();
+  }
 }
 
 // OpenCV's calib1.dat: object and image points with the Caltech toolbox's answers.

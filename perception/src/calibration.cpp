@@ -199,6 +199,14 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
     c.views.push_back(r);
   }
   if (!c.dropped.empty()) {
+    if (static_cast<int>(kept.size()) < options.min_views) {
+      throw CalibrationError(
+          "dropping the " + std::to_string(c.dropped.size()) + " views above max_view_error_px " +
+          std::to_string(options.max_view_error_px) + " px would leave " +
+          std::to_string(kept.size()) + ", fewer than min_views " +
+          std::to_string(options.min_views) +
+          ": raise max_view_error_px or take more views (worst: " + c.outliers.front() + ")");
+    }
     StereoOptions again = options;
     again.drop_outliers = false;
     StereoCalibration refit = calibrateStereo(kept, board, image_size, again);
