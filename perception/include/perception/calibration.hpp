@@ -88,9 +88,9 @@ struct DroppedView {
 struct StereoCalibration {
   BoardSpec board;
   cv::Size image_size;
-  MonoCalibration left, right;
-  cv::Mat R, T, E, F;         // x_right = R x_left + T, T in metres
-  cv::Mat R1, R2, P1, P2, Q;  // cv::stereoRectify at home
+  MonoCalibration left, right;  // K, D after the stereo fit; rms_px, view_rms_px of the mono fit
+  cv::Mat R, T, E, F;           // x_right = R x_left + T, T in metres
+  cv::Mat R1, R2, P1, P2, Q;    // cv::stereoRectify at home
   double stereo_rms_px = 0;
   double rectified_epipolar_px = 0;   // mean |y_left - y_right| of the corners after rectification
   std::vector<ViewReport> views;      // the views used
@@ -102,8 +102,10 @@ struct StereoCalibration {
   StereoRig toRig(double zoom = 1) const;
 };
 
-// Mono calibration of each camera, then cv::stereoCalibrate with the intrinsics fixed, then
-// cv::stereoRectify. Throws CalibrationError for too few views or a degenerate set.
+// Mono calibration of each camera, then cv::stereoCalibrate (from the mono intrinsics, refined
+// with R, T unless options.refine_intrinsics is false; in the simulator that halves the errors of
+// f, T and R), then cv::stereoRectify. `left`/`right` hold the final intrinsics and the mono
+// RMS. Throws CalibrationError for too few views or a degenerate set.
 StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const BoardSpec& board,
                                   cv::Size image_size, const StereoOptions& options);
 
@@ -111,7 +113,7 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
 std::string utcNow();
 
 // The rig file (StereoRig::save, so every process loads it) plus the calibration's fields:
-// E, F, R1, R2, P1, P2, Q, RMS per camera and pair, per-view errors, epipolar error, board, date.
+// E, F, R1, R2, P1, P2, Q, mono and stereo RMS, per-view errors, epipolar error, board, date.
 void saveCalibration(const std::string& path, const StereoRig& rig, const StereoCalibration& c);
 // Copies the fields of a rig file (its root, read before the file is overwritten) that are not
 // the rig's own (a calibration's report) into fs, except those named in `skip`: a rig file
