@@ -103,9 +103,9 @@ struct StereoCalibration {
 };
 
 // Mono calibration of each camera, then cv::stereoCalibrate (from the mono intrinsics, refined
-// with R, T unless options.refine_intrinsics is false; in the simulator that halves the errors of
-// f, T and R), then cv::stereoRectify. `left`/`right` hold the final intrinsics and the mono
-// RMS. Throws CalibrationError for too few views or a degenerate set.
+// with R, T unless options.refine_intrinsics is false; in the simulator that cuts the errors of
+// f, T and R 2-8 times), then cv::stereoRectify. `left`/`right` hold the final intrinsics and the
+// mono RMS. Throws CalibrationError for too few views or a degenerate set.
 StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const BoardSpec& board,
                                   cv::Size image_size, const StereoOptions& options);
 
