@@ -177,9 +177,12 @@ StereoRig StereoRig::load(const std::string& path) {
   return rig;
 }
 
-void StereoRig::save(const std::string& path) const {
+void StereoRig::save(const std::string& path,
+                     const std::function<void(cv::FileStorage&)>& extra_fields) const {
   cv::FileStorage fs(path, cv::FileStorage::WRITE);
   if (!fs.isOpened()) throw ConfigError("rig file '" + path + "': cannot write");
+  // Extra fields first: a file cut anywhere then lacks or breaks a rig field and load() refuses it.
+  if (extra_fields) extra_fields(fs);
   fs << "image_width" << left.width << "image_height" << left.height;
   fs << "left";
   writeCamera(fs, left);

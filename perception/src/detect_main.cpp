@@ -55,6 +55,7 @@ class DetectNode {
       : lcm_(lcm),
         status_(lcm, p, "ptz-detect"),
         rig_(std::move(rig)),
+        rig_file_(p.getString("rig_file")),
         detector_(std::move(dp)),
         target_class_(p.getString("target_class")),
         ch_frame_(channel(p, channels::kStereoFrame)),
@@ -89,9 +90,14 @@ class DetectNode {
     }
     if (left->cols != rig_.left.width || left->rows != rig_.left.height ||
         right->size() != left->size() || left->channels() != 3) {
-      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are not " +
-                                std::to_string(rig_.left.width) + "x" +
-                                std::to_string(rig_.left.height) + " BGR as the rig file says");
+      const std::string rig_file =
+          rig_file_.empty() ? "the built-in rig" : "rig file '" + rig_file_ + "'";
+      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are " +
+                                std::to_string(left->cols) + "x" + std::to_string(left->rows) +
+                                " (" + std::to_string(left->channels()) + " channels), " +
+                                rig_file + " is for " + std::to_string(rig_.left.width) + "x" +
+                                std::to_string(rig_.left.height) +
+                                " BGR: calibrate at this image size (ptz-calibrate)");
       return false;
     }
     return true;
@@ -179,6 +185,7 @@ class DetectNode {
   StatusReporter status_;
   RateLimitedLog log_;
   StereoRig rig_;
+  std::string rig_file_;  // named in the size-mismatch warning
   Detector detector_;
   StereoParams stereo_;
   std::string target_class_;

@@ -12,8 +12,13 @@
 #include <Eigen/Geometry>
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
+
+namespace cv {
+class FileStorage;
+}
 
 namespace ptz {
 
@@ -85,9 +90,12 @@ class StereoRig {
   StereoExtrinsics extrinsics(const PtzPose& left_pose, const PtzPose& right_pose) const;
   double baselineM() const { return home.T.norm(); }
 
-  // OpenCV FileStorage YAML; load() throws ConfigError naming the file and the field.
+  // OpenCV FileStorage YAML; load() throws ConfigError naming the file and the field, and
+  // ignores fields it does not know (a calibration's report lives beside the rig's fields).
   static StereoRig load(const std::string& path);
-  void save(const std::string& path) const;
+  // extra_fields writes more top-level fields (ptz-calibrate's report) before the rig's own.
+  void save(const std::string& path,
+            const std::function<void(cv::FileStorage&)>& extra_fields = {}) const;
   // A plausible PTZ rig: VGA, 1x-10x zoom, 0.3 m baseline, mild distortion.
   static StereoRig makeDefault();
 };
