@@ -96,7 +96,7 @@ TEST(DepthSim, BackdropAndFloorDepthWithinOnePercentRms) {
       const double rms = std::sqrt(sum_sq / n);
       std::printf("%s %s: %zu cloud points, %d at 2-5 m, depth error %.3f %% RMS\n",
                   perception::MatcherParams::modeName(mode), c.name, points.size(), n, 100 * rms);
-      EXPECT_GT(n, 5000) << c.name;
+      EXPECT_GT(n, 1000) << c.name;
       EXPECT_LT(rms, 0.01) << c.name;
     }
   }
@@ -120,13 +120,15 @@ TEST(DepthSim, SphereCloudFitsTheTrueRadiusWithinFivePercent) {
       const Pair pair = renderPair(rig, scene, c.left, c.right);
       perception::DepthParams dp;
       dp.matcher.mode = mode;
+      dp.cloud_stride_px = 1;
       perception::DepthEstimator estimator(rig, dp);
       perception::DepthFrame frame;
       std::string why;
       ASSERT_TRUE(
           estimator.process(pair.left, pair.right, c.left, c.right, std::nullopt, &frame, &why))
           << why;
-      // A finer voxel than the process's default: the fit needs the points of the limb.
+      // Every pixel and a finer voxel than the process's default: the fit needs the points of the
+      // limb.
       perception::CloudParams cp;
       cp.voxel_size_m = 0.005;
       std::vector<cv::Point3f> points;

@@ -18,8 +18,8 @@
 namespace ptz::perception {
 
 void declareCloudParams(Params& p) {
-  p.add("voxel_size_m", 0.02, "m", "voxel grid leaf size (<= 0: no downsampling)");
-  p.add("sor_mean_k", 16, "", "statistical outlier removal: neighbours (0: off)");
+  p.add("voxel_size_m", 0.05, "m", "voxel grid leaf size (<= 0: no downsampling)");
+  p.add("sor_mean_k", 8, "", "statistical outlier removal: neighbours (0: off)");
   p.add("sor_stddev_mult", 2.0, "",
         "statistical outlier removal: drop points this many standard deviations away");
 }

@@ -28,7 +28,8 @@ void declareDepthParams(Params& p) {
   p.add("wls_sigma", 1.5, "", "WLS colour sensitivity");
   p.add("min_depth_m", 0.3, "m", "nearest reconstructed depth");
   p.add("max_depth_m", 20.0, "m", "farthest reconstructed depth");
-  p.add("cloud_stride_px", 1, "px", "reproject every n-th pixel in x and y");
+  p.add("cloud_stride_px", 4, "px",
+        "reproject every n-th pixel in x and y (the voxel grid would merge them anyway)");
 }
 
 DepthParams DepthParams::fromParams(const Params& p) {

@@ -17,8 +17,8 @@ class Params;
 namespace ptz::perception {
 
 struct CloudParams {
-  double voxel_size_m = 0.02;  // <= 0: no downsampling
-  int sor_mean_k = 16;         // neighbours of statistical outlier removal (0: off)
+  double voxel_size_m = 0.05;  // <= 0: no downsampling
+  int sor_mean_k = 8;          // neighbours of statistical outlier removal (0: off)
   double sor_stddev_mult = 2.0;
 
   static CloudParams fromParams(const Params& params);

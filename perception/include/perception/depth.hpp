@@ -113,7 +113,7 @@ struct DepthParams {
   HoropterParams horopter;
   double min_depth_m = 0.3;   // points nearer or farther are dropped
   double max_depth_m = 20.0;  // (depth along the rectified left axis)
-  int cloud_stride_px = 1;    // reproject every n-th pixel in x and y
+  int cloud_stride_px = 4;    // reproject every n-th pixel in x and y
 
   // Reads the parameters declared by declareDepthParams (errors name the parameter).
   static DepthParams fromParams(const Params& params);
