@@ -8,25 +8,16 @@
 #include <cstdio>
 #include <vector>
 
+#include "bench_util.hpp"
 #include "perception/cloud.hpp"
 #include "perception/depth.hpp"
 #include "ptz/config.hpp"
 #include "ptz/transport.hpp"
 #include "sim/simulator.hpp"
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms(Clock::duration d) {
-  return std::chrono::duration<double, std::milli>(d).count();
-}
-
-void report(const char* what, const std::vector<double>& v) {
-  std::printf("%-52s median %7.2f ms   p99 %7.2f ms   (n = %zu)\n", what, ptz::percentile(v, 50),
-              ptz::percentile(v, 99), v.size());
-}
-
-}  // namespace
+using ptz::bench::Clock;
+using ptz::bench::ms;
+using ptz::bench::report;
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz_bench_depth", "Times ptz-depth's frame against the bare StereoBM.");

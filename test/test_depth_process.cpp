@@ -12,9 +12,9 @@
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
-#include "sim/simulator.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
+#include "support/rendered_frame.hpp"
 
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;
@@ -60,20 +60,6 @@ void subscribeAll(lcm::LCM& lcm, Outputs* out) {
   lcm.subscribe("POINT_CLOUD", &Outputs::onCloud, out);
   lcm.subscribe("DISPARITY_IMAGE", &Outputs::onDisparity, out);
   lcm.subscribe("PROCESS_STATUS_PTZ_DEPTH", &Outputs::onStatus, out);
-}
-
-ptzstereo::stereo_frame_t renderedFrame(int64_t seq) {
-  ptz::sim::Scene scene;
-  scene.backdrop_distance_m = 5.0;
-  ptz::sim::Simulator sim(ptz::StereoRig::makeDefault(), scene, ptz::defaultPlantParams(), 2.0, 1);
-  const ptz::sim::SimFrame f = sim.capture();
-  ptzstereo::stereo_frame_t m{};
-  m.utime = ptz::wallUtime();
-  m.seq = seq;
-  m.left = ptz::encodeImage(f.left, ptzstereo::image_t::ENCODING_RAW, 90);
-  m.right = ptz::encodeImage(f.right, ptzstereo::image_t::ENCODING_RAW, 90);
-  m.left.zoom = m.right.zoom = 1;
-  return m;
 }
 
 }  // namespace
@@ -131,7 +117,9 @@ TEST(DepthProcess, SkipsUnknownGeometryAndBadFramesSurvivesAnUnwritablePcdPath) 
   ChildProcess depth(depthCommand({"--pcd-path", "/nonexistent-dir/cloud.pcd"}));
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return out.up; }, 20s));
-  const ptzstereo::stereo_frame_t good = renderedFrame(1);
+  ptz::sim::Scene scene;
+  scene.backdrop_distance_m = 5.0;
+  const ptzstereo::stereo_frame_t good = ptz::test::renderedFrame(scene, 1);
   std::vector<ptzstereo::stereo_frame_t> bad(4, good);
   bad[0].seq = 2;
   bad[0].right.zoom = 12;  // the default rig's table ends at 10

@@ -60,6 +60,24 @@ const Case kCases[] = {
     {"strongly_verged", {0.10, 0, 1}, {-0.10, 0, 1}},
 };
 
+// The points of the cloud ptz-depth makes of a pair rendered at the case's poses.
+std::vector<cv::Point3f> cloudOf(const StereoRig& rig, const sim::Scene& scene, const Case& c,
+                                 const perception::DepthParams& depth_params,
+                                 const perception::CloudParams& cloud_params) {
+  const Pair pair = renderPair(rig, scene, c.left, c.right);
+  perception::DepthEstimator estimator(rig, depth_params);
+  perception::DepthFrame frame;
+  std::string why;
+  std::vector<cv::Point3f> points;
+  if (!estimator.process(pair.left, pair.right, c.left, c.right, std::nullopt, &frame, &why)) {
+    ADD_FAILURE() << c.name << ": " << why;
+    return points;
+  }
+  EXPECT_TRUE(perception::cloudPoints(
+      perception::makeCloud(frame.points_head_m, frame.colours_bgr, cloud_params), &points));
+  return points;
+}
+
 }  // namespace
 
 TEST(DepthSim, BackdropAndFloorDepthWithinOnePercentRms) {
@@ -70,18 +88,9 @@ TEST(DepthSim, BackdropAndFloorDepthWithinOnePercentRms) {
   using Mode = perception::MatcherParams::Mode;
   for (Mode mode : {Mode::kBm, Mode::kSgbm}) {
     for (const Case& c : kCases) {
-      const Pair pair = renderPair(rig, scene, c.left, c.right);
       perception::DepthParams dp;
       dp.matcher.mode = mode;
-      perception::DepthEstimator estimator(rig, dp);
-      perception::DepthFrame frame;
-      std::string why;
-      ASSERT_TRUE(
-          estimator.process(pair.left, pair.right, c.left, c.right, std::nullopt, &frame, &why))
-          << why;
-      std::vector<cv::Point3f> points;
-      ASSERT_TRUE(perception::cloudPoints(
-          perception::makeCloud(frame.points_head_m, frame.colours_bgr, {}), &points));
+      const std::vector<cv::Point3f> points = cloudOf(rig, scene, c, dp, {});
       const Eigen::Vector3d origin = rig.view(Side::kLeft, c.left).position_head_m;
       double sum_sq = 0;
       int n = 0;
@@ -117,23 +126,13 @@ TEST(DepthSim, SphereCloudFitsTheTrueRadiusWithinFivePercent) {
   using Mode = perception::MatcherParams::Mode;
   for (Mode mode : {Mode::kBm, Mode::kSgbm}) {
     for (const Case& c : kCases) {
-      const Pair pair = renderPair(rig, scene, c.left, c.right);
       perception::DepthParams dp;
       dp.matcher.mode = mode;
       dp.cloud_stride_px = 1;
-      perception::DepthEstimator estimator(rig, dp);
-      perception::DepthFrame frame;
-      std::string why;
-      ASSERT_TRUE(
-          estimator.process(pair.left, pair.right, c.left, c.right, std::nullopt, &frame, &why))
-          << why;
-      // Every pixel and a finer voxel than the process's default: the fit needs the points of the
-      // limb.
+      // Every pixel and a finer voxel than the process's default: the fit needs the limb.
       perception::CloudParams cp;
       cp.voxel_size_m = 0.005;
-      std::vector<cv::Point3f> points;
-      ASSERT_TRUE(perception::cloudPoints(
-          perception::makeCloud(frame.points_head_m, frame.colours_bgr, cp), &points));
+      const std::vector<cv::Point3f> points = cloudOf(rig, scene, c, dp, cp);
       // The points near the ball (the truth only selects the region; the fit finds the sphere).
       pcl::PointCloud<pcl::PointXYZ>::Ptr near(new pcl::PointCloud<pcl::PointXYZ>);
       for (const auto& p : points) {
