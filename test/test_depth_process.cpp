@@ -1,5 +1,6 @@
 // ptz-depth as a process (in a private network namespace): clouds for ptz-sim's frames with the
-// frame's utime and seq, PCD files, and bad input dropped, counted and survived.
+// frame's utime and seq, PCD files, the horopter on the OBJECT_POSE target, and bad input dropped,
+// counted and survived.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,8 +8,10 @@
 #include <fstream>
 #include <map>
 
+#include "perception/depth.hpp"
 #include "ptz/transport.hpp"
 #include "ptzstereo/image_t.hpp"
+#include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
@@ -151,5 +154,40 @@ TEST(DepthProcess, SkipsUnknownGeometryAndBadFramesSurvivesAnUnwritablePcdPath) 
   EXPECT_EQ(out.clouds.front().frame_seq, 1);
   EXPECT_EQ(out.state, ptzstereo::process_status_t::STATE_WARN);
   EXPECT_NE(out.message.find("/nonexistent-dir/cloud.pcd"), std::string::npos) << out.message;
+  EXPECT_EQ(depth.stop(), 0);
+}
+
+TEST(DepthProcess, CentresTheSearchRangeOnTheObjectPoseTarget) {
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  Outputs out;
+  subscribeAll(lcm, &out);
+  ChildProcess depth(depthCommand({}));
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return out.up; }, 20s));
+  ptz::sim::Scene scene;
+  scene.backdrop_distance_m = 5.0;
+  const ptzstereo::stereo_frame_t frame = ptz::test::renderedFrame(scene, 1);
+  ptzstereo::object_pose_t pose{};
+  pose.utime = frame.utime;
+  pose.frame_seq = frame.seq;
+  ptzstereo::object_3d_t target{};
+  target.class_name = "red_ball";
+  target.position_m[0] = 0.2;
+  target.position_m[1] = 0.1;
+  target.position_m[2] = 3.0;
+  pose.objects = {target};
+  pose.num_objects = 1;
+  pose.target_index = 0;
+  lcm.publish("OBJECT_POSE", &pose);
+  lcm.publish("STEREO_FRAME", &frame);
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return !out.clouds.empty() && out.counters["frames_processed"] == 1; }, 20s));
+  // The range is 64 wide (the default) and centred on the target's disparity at this geometry.
+  ptz::perception::Rectifier rectifier(ptz::StereoRig::makeDefault());
+  std::string why;
+  ASSERT_TRUE(rectifier.update({0, 0, 1}, {0, 0, 1}, &why));
+  const double d = rectifier.current().disparityOf({0.2, 0.1, 3.0});
+  EXPECT_EQ(out.counters["min_disparity_px"], static_cast<int64_t>(std::floor(d)) - 32);
+  EXPECT_EQ(out.counters["frames_following_target"], 1);
   EXPECT_EQ(depth.stop(), 0);
 }
