@@ -52,11 +52,10 @@ DisparityMatcher::DisparityMatcher(MatcherParams p) : params_(std::move(p)) {
   matcher_->setSpeckleWindowSize(m.speckle_window_px);
   matcher_->setSpeckleRange(m.speckle_range_px);
   if (m.wls) {
-    auto wls = cv::ximgproc::createDisparityWLSFilter(matcher_);
-    wls->setLambda(m.wls_lambda);
-    wls->setSigmaColor(m.wls_sigma);
+    wls_ = cv::ximgproc::createDisparityWLSFilter(matcher_);
+    wls_->setLambda(m.wls_lambda);
+    wls_->setSigmaColor(m.wls_sigma);
     right_matcher_ = cv::ximgproc::createRightMatcher(matcher_);
-    wls_ = wls;
   }
 }
 

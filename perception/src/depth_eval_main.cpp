@@ -49,6 +49,9 @@ int main(int argc, char** argv) {
     const std::string gt_right_path = p.getString("gt_right");
     const cv::Mat gt_right =
         gt_right_path.empty() ? cv::Mat() : loadGroundTruth(gt_right_path, p.getDouble("scale"));
+    if (!gt_right.empty() && gt_right.size() != gt.size()) {
+      throw ConfigError("--gt-right differs in size from --gt");
+    }
 
     DisparityMatcher matcher(dp.matcher);
     const int min_d = dp.horopter.min_disparity_px;

@@ -14,6 +14,9 @@
 
 #include "ptz/rig.hpp"
 
+namespace cv::ximgproc {
+class DisparityWLSFilter;
+}
 namespace ptz {
 class Params;
 }
@@ -52,8 +55,6 @@ class DisparityMatcher {
   void compute(const cv::Mat& left_gray, const cv::Mat& right_gray, int min_disparity_px,
                cv::Mat* disparity_16s);
   const MatcherParams& params() const { return params_; }
-  // The value compute() writes where a pixel has no disparity.
-  static int invalidValue(int min_disparity_px) { return (min_disparity_px - 1) * 16; }
 
  private:
   void match(const cv::Mat& left_gray, const cv::Mat& right_gray, int min_disparity_px,
@@ -62,7 +63,7 @@ class DisparityMatcher {
   MatcherParams params_;
   cv::Ptr<cv::StereoMatcher> matcher_;
   cv::Ptr<cv::StereoMatcher> right_matcher_;  // WLS only
-  cv::Ptr<cv::Algorithm> wls_;
+  cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls_;
   cv::Mat left_pad_, right_pad_, disp_pad_;  // scratch of full_width
 };
 
