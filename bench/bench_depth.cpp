@@ -72,7 +72,10 @@ int main(int argc, char** argv) {
   }
   std::printf("VGA, %d disparities, block %d px, %d OpenCV threads\n",
               params.matcher.num_disparities, params.matcher.block_size_px, cv::getNumThreads());
-  report("bare cv::StereoBM::compute (rectified pair)", bare_ms);
+  const bool bm = params.matcher.mode == perception::MatcherParams::Mode::kBm;
+  report(bm ? "bare cv::StereoBM::compute (rectified pair)"
+            : "bare cv::StereoSGBM::compute (rectified pair)",
+         bare_ms);
   report("full ptz-depth frame (rectify+match+reproject+cloud)", full_ms);
   report("  of which the cloud (voxel grid + outlier removal)", cloud_ms);
   std::printf("%-52s %.2f x\n", "  full / bare (medians)",
