@@ -8,24 +8,15 @@
 #include <cstring>
 #include <vector>
 
+#include "bench_util.hpp"
 #include "perception/detector.hpp"
 #include "perception/stereo.hpp"
 #include "ptz/transport.hpp"
 #include "sim/simulator.hpp"
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double ms(Clock::duration d) {
-  return std::chrono::duration<double, std::milli>(d).count();
-}
-
-void report(const char* what, const std::vector<double>& v) {
-  std::printf("%-48s median %8.3f ms   p99 %8.3f ms   (n = %zu)\n", what, ptz::percentile(v, 50),
-              ptz::percentile(v, 99), v.size());
-}
-
-}  // namespace
+using ptz::bench::Clock;
+using ptz::bench::ms;
+using ptz::bench::report;
 
 int main() {
   cv::setNumThreads(1);

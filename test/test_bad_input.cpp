@@ -17,6 +17,7 @@
 #include "sim/simulator.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
+#include "support/rendered_frame.hpp"
 
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;
@@ -60,14 +61,7 @@ ptzstereo::stereo_frame_t renderedFrame(int64_t seq) {
   ball.color_bgr = {30, 30, 210};
   ball.trajectory.centre_m = {0.2, 0.0, 3.0};
   scene.objects = {ball};
-  ptz::sim::Simulator sim(ptz::StereoRig::makeDefault(), scene, ptz::defaultPlantParams(), 2.0, 1);
-  const ptz::sim::SimFrame f = sim.capture();
-  ptzstereo::stereo_frame_t m{};
-  m.utime = ptz::wallUtime();
-  m.seq = seq;
-  m.left = ptz::encodeImage(f.left, ptzstereo::image_t::ENCODING_RAW, 90);
-  m.right = ptz::encodeImage(f.right, ptzstereo::image_t::ENCODING_RAW, 90);
-  return m;
+  return ptz::test::renderedFrame(scene, seq);
 }
 
 }  // namespace

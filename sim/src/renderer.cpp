@@ -59,6 +59,18 @@ cv::Vec3b shade(const cv::Vec3b& base, const Eigen::Vector3d& normal) {
                    cv::saturate_cast<uchar>(base[2] * intensity));
 }
 
+// Bilinear grey level of the texture atlas's backdrop at texel (x, y), wrapped, 0..1-ish.
+double textureLevel(const cv::Mat& atlas, double x, double y) {
+  const double fx = std::floor(x), fy = std::floor(y);
+  const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+  auto at = [&](int xx, int yy) {
+    return atlas.at<cv::Vec3b>(yy & (kTextureSize - 1), xx & (kTextureSize - 1))[1] / 128.0;
+  };
+  const double ax = x - fx, ay = y - fy;
+  return (1 - ay) * ((1 - ax) * at(x0, y0) + ax * at(x0 + 1, y0)) +
+         ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
+}
+
 // Pixel rectangle that holds the image of a sphere of radius r around p (head frame): the
 // projections of a slightly larger sphere's surface, padded.
 cv::Rect boundingRect(const CameraView& view, const Eigen::Vector3d& p, double r) {
@@ -223,12 +235,15 @@ void Renderer::drawObject(const SceneObject& object, double t_s, const CameraVie
       const Eigen::Vector3d d = R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1.0);
       double t = -1;
       Eigen::Vector3d normal;
+      Eigen::Vector2d surface_m;  // texture coordinates on the surface
       if (object.shape == SceneObject::Shape::kSphere) {
         const double b = oc.dot(d), a = d.squaredNorm();
         const double disc = b * b - a * (oc.squaredNorm() - object.radius_m * object.radius_m);
         if (disc < 0) continue;
         t = (-b - std::sqrt(disc)) / a;
         normal = (oc + t * d) / object.radius_m;
+        surface_m = object.radius_m * Eigen::Vector2d(std::atan2(normal.x(), -normal.z()),
+                                                      std::asin(std::clamp(normal.y(), -1.0, 1.0)));
       } else {
         const Eigen::Vector3d db = box_to_head.transpose() * d;
         double t_near = -1e30, t_far = 1e30;
@@ -252,10 +267,19 @@ void Renderer::drawObject(const SceneObject& object, double t_s, const CameraVie
         Eigen::Vector3d n_box = Eigen::Vector3d::Zero();
         n_box[axis] = db[axis] > 0 ? -1 : 1;
         normal = box_to_head * n_box;
+        const Eigen::Vector3d p_box = oc_box + t * db;
+        surface_m = {p_box[(axis + 1) % 3], p_box[(axis + 2) % 3]};
       }
       if (t <= 0 || t >= out_depth[u]) continue;
       out_depth[u] = static_cast<float>(t);
       out[u] = shade(object.color_bgr, normal);
+      if (object.textured) {
+        // Four times finer than the backdrop: objects are small, and the texture's coarse
+        // scales would only shade them.
+        const double texel_m = scene_.texture_m_per_texel / 4;
+        const double level = textureLevel(atlas_, surface_m.x() / texel_m, surface_m.y() / texel_m);
+        out[u] = out[u] * (0.5 + 0.5 * level);
+      }
     }
   }
 }

@@ -129,6 +129,7 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
         if (bgr[k] < 0 || bgr[k] > 255) throw ConfigError(w + ": field 'color_bgr' must be 0..255");
         o.color_bgr[k] = static_cast<uchar>(bgr[k]);
       }
+      o.textured = !n["textured"].empty() && readInt(n, "textured", w) != 0;
       Trajectory& t = o.trajectory;
       t.type = Trajectory::parseType(
           n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);

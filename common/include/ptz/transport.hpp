@@ -40,6 +40,7 @@ constexpr const char* kSimTruth = "SIM_TRUTH";
 constexpr const char* kObjectDetections = "OBJECT_DETECTIONS";
 constexpr const char* kObjectPose = "OBJECT_POSE";
 constexpr const char* kPointCloud = "POINT_CLOUD";
+constexpr const char* kDisparityImage = "DISPARITY_IMAGE";
 constexpr const char* kProcessStatusPrefix = "PROCESS_STATUS_";
 }  // namespace channels
 

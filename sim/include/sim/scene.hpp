@@ -36,6 +36,9 @@ struct SceneObject {
   Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box
   double yaw_rad = 0.0;                                      // box, about the head's y axis
   cv::Vec3b color_bgr{0, 0, 220};
+  // The colour modulated by the backdrop's texture on the surface: gives dense stereo something
+  // to match (plain objects only shade smoothly).
+  bool textured = false;
   Trajectory trajectory;
 
   double boundingRadius() const;

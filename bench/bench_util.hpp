@@ -1,0 +1,23 @@
+// What the benchmarks share: milliseconds of a duration, and a median/p99 line.
+#pragma once
+
+#include <chrono>
+#include <cstdio>
+#include <vector>
+
+#include "ptz/transport.hpp"
+
+namespace ptz::bench {
+
+using Clock = std::chrono::steady_clock;
+
+inline double ms(Clock::duration d) {
+  return std::chrono::duration<double, std::milli>(d).count();
+}
+
+inline void report(const char* what, const std::vector<double>& v) {
+  std::printf("%-52s median %8.3f ms   p99 %8.3f ms   (n = %zu)\n", what, ptz::percentile(v, 50),
+              ptz::percentile(v, 99), v.size());
+}
+
+}  // namespace ptz::bench

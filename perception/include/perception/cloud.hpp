@@ -1,0 +1,42 @@
+// The scene cloud: coloured head-frame points through PCL's voxel grid and statistical outlier
+// removal, packed in PCL's layout (pcl::PointXYZRGB) as a point_cloud_t, and written as PCD.
+// PCL stays inside cloud.cpp: this header is cheap to include.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+#include "ptzstereo/point_cloud_t.hpp"
+
+namespace ptz {
+class Params;
+}
+
+namespace ptz::perception {
+
+struct CloudParams {
+  double voxel_size_m = 0.05;  // <= 0: no downsampling
+  int sor_mean_k = 8;          // neighbours of statistical outlier removal (0: off)
+  double sor_stddev_mult = 2.0;
+
+  static CloudParams fromParams(const Params& params);
+};
+void declareCloudParams(Params& params);
+
+// Filters the points and packs them (x, y, z, rgb; PCL's 32-byte PointXYZRGB) with frame_id
+// "head"; the caller stamps utime, frame_seq and publish_utime.
+ptzstereo::point_cloud_t makeCloud(const std::vector<cv::Point3f>& points_head_m,
+                                   const std::vector<cv::Vec3b>& colours_bgr,
+                                   const CloudParams& params);
+
+// The xyz of every point of a cloud in PCL's layout (NaN points skipped); false if the layout
+// has no float x, y, z fields or its sizes disagree.
+bool cloudPoints(const ptzstereo::point_cloud_t& cloud, std::vector<cv::Point3f>* points);
+
+// Binary PCD (pcl_viewer opens it). False with a message naming the file when it cannot be
+// written.
+bool writePcd(const ptzstereo::point_cloud_t& cloud, const std::string& path, std::string* error);
+
+}  // namespace ptz::perception

@@ -1,0 +1,153 @@
+// Dense depth from a PTZ stereo pair (paper, section 2.4): rectification with the frame's own
+// geometry, block matching (OpenCV StereoBM, or StereoSGBM as a quality mode) over a horopter
+// that can follow the target, and reprojection of every valid disparity into the head frame.
+// No PCL here (cloud.hpp holds it) and no LCM.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ptz/rig.hpp"
+
+namespace cv::ximgproc {
+class DisparityWLSFilter;
+}
+namespace ptz {
+class Params;
+}
+
+namespace ptz::perception {
+
+struct MatcherParams {
+  enum class Mode { kBm, kSgbm };
+  Mode mode = Mode::kBm;
+  int num_disparities = 64;  // width of the search range (the horopter), a multiple of 16
+  int block_size_px = 11;    // SAD window of BM (odd, 5..255)
+  int sgbm_block_size_px = 3;
+  int prefilter_size_px = 7;  // paper: normalised over 7x7
+  int prefilter_cap = 31;
+  int texture_threshold = 10;  // BM: least sum of |gradient| in the window
+  int uniqueness_pct = 15;     // best cost this % below the second best
+  int speckle_window_px = 100;
+  int speckle_range_px = 2;
+  int lr_max_diff_px = 1;  // left-right consistency; < 0: off
+  // Pads the images so that the search range fits at the left edge too: pixels there are
+  // matched instead of left invalid (costs num_disparities more columns).
+  bool full_width = false;
+  bool wls = false;  // ximgproc's WLS filter on the disparity (quality mode)
+  double wls_lambda = 8000;
+  double wls_sigma = 1.5;
+
+  static Mode parseMode(const std::string& name);
+  static const char* modeName(Mode mode);
+};
+
+// Disparity of a rectified pair, CV_16S in 1/16 px; invalid pixels < min_disparity * 16.
+class DisparityMatcher {
+ public:
+  explicit DisparityMatcher(MatcherParams params);
+  // Grey 8-bit rectified images of the same size.
+  void compute(const cv::Mat& left_gray, const cv::Mat& right_gray, int min_disparity_px,
+               cv::Mat* disparity_16s);
+  const MatcherParams& params() const { return params_; }
+
+ private:
+  void match(const cv::Mat& left_gray, const cv::Mat& right_gray, int min_disparity_px,
+             cv::Mat* disparity_16s);
+
+  MatcherParams params_;
+  cv::Ptr<cv::StereoMatcher> matcher_;
+  cv::Ptr<cv::StereoMatcher> right_matcher_;  // WLS only
+  cv::Ptr<cv::ximgproc::DisparityWLSFilter> wls_;
+  cv::Mat left_pad_, right_pad_, disp_pad_;  // scratch of full_width
+};
+
+// Rectification of one stereo geometry (both views and their relative pose).
+struct Rectification {
+  cv::Mat map_left[2], map_right[2];  // initUndistortRectifyMap, fixed point
+  cv::Mat R1, R2, P1, P2, Q;          // cv::stereoRectify
+  // Rectified-left camera frame to head frame.
+  Eigen::Matrix3d rotation_head_rect = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d position_head_m = Eigen::Vector3d::Zero();
+
+  // Disparity (px) of a head-frame point, NaN behind the cameras.
+  double disparityOf(const Eigen::Vector3d& p_head) const;
+  // Disparity (px) of a point at depth_m straight ahead of the rectified left camera.
+  double disparityAtDepth(double depth_m) const;
+};
+
+// Builds rectification maps for the pose of a frame; rebuilds only when the pose changes.
+class Rectifier {
+ public:
+  explicit Rectifier(StereoRig rig) : rig_(std::move(rig)) {}
+  // False (with the reason) when the geometry is unknown: zoom outside the calibrated table or
+  // non-finite angles.
+  bool update(const PtzPose& left, const PtzPose& right, std::string* why);
+  const Rectification& current() const { return rect_; }
+  int rebuilds() const { return rebuilds_; }
+  const StereoRig& rig() const { return rig_; }
+
+ private:
+  StereoRig rig_;
+  Rectification rect_;
+  std::optional<std::pair<PtzPose, PtzPose>> pose_;
+  int rebuilds_ = 0;
+};
+
+// Where the disparity search lies, in the order it is chosen: around the target's disparity,
+// else ending at the disparity of far_depth_m, else from min_disparity_px.
+struct HoropterParams {
+  bool follow_target = true;
+  double far_depth_m = 10.0;  // <= 0: use min_disparity_px (parameter horopter_far_m)
+  int min_disparity_px = 0;
+};
+int chooseMinDisparity(const Rectification& rect, const HoropterParams& params, int num_disparities,
+                       const std::optional<Eigen::Vector3d>& target_head_m);
+
+struct DepthParams {
+  MatcherParams matcher;
+  HoropterParams horopter;
+  double min_depth_m = 0.3;   // points nearer or farther are dropped
+  double max_depth_m = 20.0;  // (depth along the rectified left axis)
+  int cloud_stride_px = 4;    // reproject every n-th pixel in x and y
+
+  // Reads the parameters declared by declareDepthParams (errors name the parameter).
+  static DepthParams fromParams(const Params& params);
+};
+// Declares the parameters of DepthParams with their defaults, units and help.
+void declareDepthParams(Params& params);
+
+// Valid disparities of one frame as head-frame points with the left image's colour.
+struct DepthFrame {
+  std::vector<cv::Point3f> points_head_m;
+  std::vector<cv::Vec3b> colours_bgr;
+  cv::Mat disparity_16s;  // rectified left view
+  cv::Mat left_rectified_bgr;
+  int min_disparity_px = 0;
+};
+
+// Rectify + match + reproject for frames of a rig; keeps its maps and matcher between frames.
+class DepthEstimator {
+ public:
+  DepthEstimator(StereoRig rig, DepthParams params);
+  // BGR8 images of the rig's size, each with its PTZ pose at capture. False (why set) when the
+  // geometry of the frame is unknown.
+  bool process(const cv::Mat& left_bgr, const cv::Mat& right_bgr, const PtzPose& left_pose,
+               const PtzPose& right_pose, const std::optional<Eigen::Vector3d>& target_head_m,
+               DepthFrame* out, std::string* why);
+  const Rectifier& rectifier() const { return rectifier_; }
+  const DepthParams& params() const { return params_; }
+
+ private:
+  DepthParams params_;
+  Rectifier rectifier_;
+  DisparityMatcher matcher_;
+  cv::Mat left_gray_, right_gray_, right_rect_;  // scratch
+};
+
+}  // namespace ptz::perception

@@ -1,0 +1,225 @@
+#include "perception/depth.hpp"
+
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/ximgproc/disparity_filter.hpp>
+
+#include <cmath>
+#include <limits>
+
+#include "ptz/config.hpp"
+
+namespace ptz::perception {
+
+MatcherParams::Mode MatcherParams::parseMode(const std::string& name) {
+  if (name == "bm") return Mode::kBm;
+  if (name == "sgbm") return Mode::kSgbm;
+  throw ConfigError("parameter 'mode': '" + name + "' is neither bm nor sgbm");
+}
+
+const char* MatcherParams::modeName(Mode mode) {
+  return mode == Mode::kBm ? "bm" : "sgbm";
+}
+
+DisparityMatcher::DisparityMatcher(MatcherParams p) : params_(std::move(p)) {
+  const auto& m = params_;
+  if (m.num_disparities <= 0 || m.num_disparities % 16 != 0) {
+    throw ConfigError("parameter 'num_disparities' must be a positive multiple of 16");
+  }
+  if (m.mode == MatcherParams::Mode::kBm) {
+    if (m.block_size_px < 5 || m.block_size_px % 2 == 0) {
+      throw ConfigError("parameter 'block_size_px' must be odd and >= 5");
+    }
+    auto bm = cv::StereoBM::create(m.num_disparities, m.block_size_px);
+    // The paper's pre-filter: the image normalised over a small window.
+    bm->setPreFilterType(cv::StereoBM::PREFILTER_NORMALIZED_RESPONSE);
+    bm->setPreFilterSize(m.prefilter_size_px);
+    bm->setPreFilterCap(m.prefilter_cap);
+    bm->setTextureThreshold(m.texture_threshold);
+    bm->setUniquenessRatio(m.uniqueness_pct);
+    matcher_ = bm;
+  } else {
+    const int b = m.sgbm_block_size_px;
+    if (b < 1 || b % 2 == 0) throw ConfigError("parameter 'sgbm_block_size_px' must be odd");
+    // OpenCV's recommended smoothness penalties for one channel; HH4 (4 paths) was the best
+    // of the modes on the Middlebury sets.
+    matcher_ =
+        cv::StereoSGBM::create(0, m.num_disparities, b, 8 * b * b, 32 * b * b, -1, m.prefilter_cap,
+                               m.uniqueness_pct, 0, 0, cv::StereoSGBM::MODE_HH4);
+  }
+  // Left-right consistency from the cost volume, inside OpenCV (no second pass).
+  matcher_->setDisp12MaxDiff(m.lr_max_diff_px);
+  matcher_->setSpeckleWindowSize(m.speckle_window_px);
+  matcher_->setSpeckleRange(m.speckle_range_px);
+  if (m.wls) {
+    wls_ = cv::ximgproc::createDisparityWLSFilter(matcher_);
+    wls_->setLambda(m.wls_lambda);
+    wls_->setSigmaColor(m.wls_sigma);
+    right_matcher_ = cv::ximgproc::createRightMatcher(matcher_);
+  }
+}
+
+void DisparityMatcher::compute(const cv::Mat& left_gray, const cv::Mat& right_gray,
+                               int min_disparity_px, cv::Mat* disparity_16s) {
+  if (params_.full_width) {
+    // OpenCV leaves the columns where the whole range does not fit invalid: widen the images
+    // by the range, match, and cut the disparity back to the original columns.
+    const int left = std::max(min_disparity_px + params_.num_disparities, 0);
+    const int right = std::max(-min_disparity_px, 0);
+    cv::copyMakeBorder(left_gray, left_pad_, 0, 0, left, right, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(right_gray, right_pad_, 0, 0, left, right, cv::BORDER_REPLICATE);
+    match(left_pad_, right_pad_, min_disparity_px, &disp_pad_);
+    disp_pad_.colRange(left, left + left_gray.cols).copyTo(*disparity_16s);
+    return;
+  }
+  match(left_gray, right_gray, min_disparity_px, disparity_16s);
+}
+
+void DisparityMatcher::match(const cv::Mat& left_gray, const cv::Mat& right_gray,
+                             int min_disparity_px, cv::Mat* disparity_16s) {
+  matcher_->setMinDisparity(min_disparity_px);
+  if (!wls_) {
+    matcher_->compute(left_gray, right_gray, *disparity_16s);
+    return;
+  }
+  cv::Mat left_disp, right_disp;
+  right_matcher_->setMinDisparity(-(min_disparity_px + params_.num_disparities) + 1);
+  matcher_->compute(left_gray, right_gray, left_disp);
+  right_matcher_->compute(right_gray, left_gray, right_disp);
+  wls_.dynamicCast<cv::ximgproc::DisparityWLSFilter>()->filter(left_disp, left_gray, *disparity_16s,
+                                                               right_disp);
+}
+
+double Rectification::disparityOf(const Eigen::Vector3d& p_head) const {
+  const Eigen::Vector3d p = rotation_head_rect.transpose() * (p_head - position_head_m);
+  if (!(p.z() > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double xl = P1.at<double>(0, 0) * p.x() / p.z() + P1.at<double>(0, 2);
+  const double xr =
+      (P2.at<double>(0, 0) * p.x() + P2.at<double>(0, 3)) / p.z() + P2.at<double>(0, 2);
+  return xl - xr;
+}
+
+double Rectification::disparityAtDepth(double depth_m) const {
+  return P1.at<double>(0, 2) - P2.at<double>(0, 2) - P2.at<double>(0, 3) / depth_m;
+}
+
+namespace {
+
+bool calibrated(const CameraSpec& spec, const PtzPose& pose) {
+  return std::isfinite(pose.pan_rad) && std::isfinite(pose.tilt_rad) && std::isfinite(pose.zoom) &&
+         pose.zoom >= spec.minZoom() - 1e-9 && pose.zoom <= spec.maxZoom() + 1e-9;
+}
+
+bool samePose(const PtzPose& a, const PtzPose& b) {
+  // Below this an angle moves the image by < 0.01 px even at 10x zoom: not worth new maps.
+  constexpr double kAngleTol = 1e-6, kZoomTol = 1e-6;
+  return std::abs(a.pan_rad - b.pan_rad) < kAngleTol &&
+         std::abs(a.tilt_rad - b.tilt_rad) < kAngleTol && std::abs(a.zoom - b.zoom) < kZoomTol;
+}
+
+cv::Mat cameraMatrix(const Intrinsics& k) {
+  return (cv::Mat_<double>(3, 3) << k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+}
+
+}  // namespace
+
+bool Rectifier::update(const PtzPose& left, const PtzPose& right, std::string* why) {
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const CameraSpec& spec = rig_.camera(side);
+    const PtzPose& pose = side == Side::kLeft ? left : right;
+    if (!calibrated(spec, pose)) {
+      *why = std::string(sideName(side)) + " camera at pan " + std::to_string(pose.pan_rad) +
+             ", tilt " + std::to_string(pose.tilt_rad) + ", zoom " + std::to_string(pose.zoom) +
+             ": outside the calibrated zoom table [" + std::to_string(spec.minZoom()) + ", " +
+             std::to_string(spec.maxZoom()) + "] or not finite";
+      return false;
+    }
+  }
+  if (pose_ && samePose(pose_->first, left) && samePose(pose_->second, right)) return true;
+  const CameraView lv = rig_.view(Side::kLeft, left);
+  const CameraView rv = rig_.view(Side::kRight, right);
+  const StereoExtrinsics e = rig_.extrinsics(left, right);
+  const cv::Mat K1 = cameraMatrix(lv.intrinsics), K2 = cameraMatrix(rv.intrinsics);
+  const cv::Mat D1(lv.intrinsics.distortion, true), D2(rv.intrinsics.distortion, true);
+  cv::Mat R, T;
+  cv::eigen2cv(e.R, R);
+  cv::eigen2cv(e.T, T);
+  const cv::Size size(lv.width, lv.height);
+  Rectification& r = rect_;
+  // No CALIB_ZERO_DISPARITY: vergent cameras keep their image content, so points beyond the
+  // fixation point get negative disparities (the horopter handles them).
+  cv::stereoRectify(K1, D1, K2, D2, size, R, T, r.R1, r.R2, r.P1, r.P2, r.Q, 0, -1, size);
+  cv::initUndistortRectifyMap(K1, D1, r.R1, r.P1, size, CV_16SC2, r.map_left[0], r.map_left[1]);
+  cv::initUndistortRectifyMap(K2, D2, r.R2, r.P2, size, CV_16SC2, r.map_right[0], r.map_right[1]);
+  Eigen::Matrix3d R1;
+  cv::cv2eigen(r.R1, R1);
+  r.rotation_head_rect = lv.rotation_head_camera * R1.transpose();
+  r.position_head_m = lv.position_head_m;
+  pose_ = std::make_pair(left, right);
+  ++rebuilds_;
+  return true;
+}
+
+int chooseMinDisparity(const Rectification& rect, const HoropterParams& p, int num_disparities,
+                       const std::optional<Eigen::Vector3d>& target_head_m) {
+  if (p.follow_target && target_head_m) {
+    const double d = rect.disparityOf(*target_head_m);
+    if (std::isfinite(d)) return static_cast<int>(std::floor(d)) - num_disparities / 2;
+  }
+  if (p.far_depth_m > 0) return static_cast<int>(std::floor(rect.disparityAtDepth(p.far_depth_m)));
+  return p.min_disparity_px;
+}
+
+DepthEstimator::DepthEstimator(StereoRig rig, DepthParams params)
+    : params_(std::move(params)), rectifier_(std::move(rig)), matcher_(params_.matcher) {
+  if (params_.cloud_stride_px < 1) throw ConfigError("parameter 'cloud_stride_px' must be >= 1");
+  if (!(params_.min_depth_m > 0) || !(params_.max_depth_m > params_.min_depth_m)) {
+    throw ConfigError("parameters 'min_depth_m', 'max_depth_m': need 0 < min < max");
+  }
+}
+
+bool DepthEstimator::process(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
+                             const PtzPose& left_pose, const PtzPose& right_pose,
+                             const std::optional<Eigen::Vector3d>& target_head_m, DepthFrame* out,
+                             std::string* why) {
+  if (!rectifier_.update(left_pose, right_pose, why)) return false;
+  const Rectification& r = rectifier_.current();
+  cv::remap(left_bgr, out->left_rectified_bgr, r.map_left[0], r.map_left[1], cv::INTER_LINEAR);
+  cv::cvtColor(out->left_rectified_bgr, left_gray_, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(right_bgr, right_gray_, cv::COLOR_BGR2GRAY);
+  cv::remap(right_gray_, right_rect_, r.map_right[0], r.map_right[1], cv::INTER_LINEAR);
+
+  const int num = params_.matcher.num_disparities;
+  out->min_disparity_px = chooseMinDisparity(r, params_.horopter, num, target_head_m);
+  matcher_.compute(left_gray_, right_rect_, out->min_disparity_px, &out->disparity_16s);
+
+  // Valid disparities inside the depth range, as (x, y, d) for one perspectiveTransform.
+  const int d_lo = std::max<int>(out->min_disparity_px * 16,
+                                 std::ceil(r.disparityAtDepth(params_.max_depth_m) * 16));
+  const int d_hi = std::floor(r.disparityAtDepth(params_.min_depth_m) * 16);
+  const int stride = params_.cloud_stride_px;
+  std::vector<cv::Point3f> xyd;
+  out->colours_bgr.clear();
+  const cv::Mat& disp = out->disparity_16s;
+  for (int y = 0; y < disp.rows; y += stride) {
+    const short* d = disp.ptr<short>(y);
+    const cv::Vec3b* c = out->left_rectified_bgr.ptr<cv::Vec3b>(y);
+    for (int x = 0; x < disp.cols; x += stride) {
+      if (d[x] < d_lo || d[x] > d_hi) continue;
+      xyd.emplace_back(static_cast<float>(x), static_cast<float>(y), d[x] / 16.0f);
+      out->colours_bgr.push_back(c[x]);
+    }
+  }
+  // Q takes (x, y, d) to the rectified left camera; then rectified camera to head.
+  Eigen::Matrix4d head_rect = Eigen::Matrix4d::Identity();
+  head_rect.topLeftCorner<3, 3>() = r.rotation_head_rect;
+  head_rect.topRightCorner<3, 1>() = r.position_head_m;
+  cv::Mat H;
+  cv::eigen2cv(head_rect, H);
+  const cv::Mat M = H * r.Q;
+  out->points_head_m.clear();
+  if (!xyd.empty()) cv::perspectiveTransform(xyd, out->points_head_m, M);
+  return true;
+}
+
+}  // namespace ptz::perception

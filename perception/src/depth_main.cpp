@@ -1,0 +1,197 @@
+// ptz-depth: STEREO_FRAME (+ OBJECT_POSE for the horopter) -> POINT_CLOUD, optionally
+// DISPARITY_IMAGE and PCD files. Always the newest frame (queue of one); outputs carry the source
+// frame's utime and seq; bad frames and unwritable PCD files are counted and warned about, never
+// fatal.
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <memory>
+#include <optional>
+
+#include "perception/cloud.hpp"
+#include "perception/depth.hpp"
+#include "ptz/transport.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/point_cloud_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+
+namespace ptz::perception {
+namespace {
+
+void declare(Params& p) {
+  addTransportParams(p);
+  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareDepthParams(p);
+  declareCloudParams(p);
+  p.add("target_max_age_s", 1.0, "s", "an OBJECT_POSE target older than this is not followed");
+  p.add("pcd_path", "",
+        "write clouds as binary PCD here ({seq} is replaced by the frame's seq); empty: none");
+  p.add("pcd_every_n", 0, "", "write every n-th cloud (0: the first only)");
+  p.add("publish_disparity", false, "publish the disparity on DISPARITY_IMAGE (grey, raw)");
+}
+
+class DepthNode {
+ public:
+  DepthNode(const Params& p, lcm::LCM* lcm, StereoRig rig)
+      : lcm_(lcm),
+        status_(lcm, p, "ptz-depth"),
+        estimator_(std::move(rig), DepthParams::fromParams(p)),
+        cloud_params_(CloudParams::fromParams(p)),
+        target_max_age_us_(static_cast<int64_t>(p.getDouble("target_max_age_s") * 1e6)),
+        pcd_path_(p.getString("pcd_path")),
+        pcd_every_n_(p.getInt("pcd_every_n")),
+        publish_disparity_(p.getBool("publish_disparity")),
+        ch_frame_(channel(p, channels::kStereoFrame)),
+        ch_pose_(channel(p, channels::kObjectPose)),
+        ch_cloud_(channel(p, channels::kPointCloud)),
+        ch_disparity_(channel(p, channels::kDisparityImage)) {
+    poses_ = std::make_unique<SafeSubscription<ptzstereo::object_pose_t>>(
+        *lcm_, ch_pose_, status_,
+        [this](const std::string&, const ptzstereo::object_pose_t& m) { onPose(m); });
+    frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
+        *lcm_, ch_frame_, status_,
+        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(m); }, 1);
+  }
+
+  int run() { return serveUntilStopped(*lcm_, status_); }
+
+ private:
+  void onPose(const ptzstereo::object_pose_t& m) {
+    status_.countIn(ch_pose_, (wallUtime() - m.utime) / 1000.0);
+    if (m.target_index < 0 || m.target_index >= static_cast<int32_t>(m.objects.size())) return;
+    const auto& o = m.objects[static_cast<size_t>(m.target_index)];
+    target_head_m_ = Eigen::Vector3d(o.position_m[0], o.position_m[1], o.position_m[2]);
+    target_utime_ = m.utime;
+  }
+
+  void drop(const std::string& reason, const std::string& message) {
+    status_.countDropped(ch_frame_, reason);
+    log_.warn(reason, "ptz-depth: dropped " + message);
+  }
+
+  bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
+    std::string error;
+    if (!decodeImage(m.left, left, &error) || !decodeImage(m.right, right, &error)) {
+      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
+      return false;
+    }
+    const StereoRig& rig = estimator_.rectifier().rig();
+    if (left->cols != rig.left.width || left->rows != rig.left.height ||
+        right->size() != left->size() || left->type() != CV_8UC3 || right->type() != CV_8UC3) {
+      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are not " +
+                                std::to_string(rig.left.width) + "x" +
+                                std::to_string(rig.left.height) + " BGR as the rig file says");
+      return false;
+    }
+    return true;
+  }
+
+  void onFrame(const ptzstereo::stereo_frame_t& m) {
+    status_.countIn(ch_frame_, (wallUtime() - m.utime) / 1000.0);
+    cv::Mat left, right;
+    if (!decode(m, &left, &right)) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::optional<Eigen::Vector3d> target;
+    if (target_head_m_ && std::abs(m.utime - target_utime_) <= target_max_age_us_) {
+      target = target_head_m_;
+    }
+    std::string why;
+    if (!estimator_.process(left, right, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom},
+                            {m.right.pan_rad, m.right.tilt_rad, m.right.zoom}, target, &depth_,
+                            &why)) {
+      drop("unknown_geometry", "frame " + std::to_string(m.seq) + ": " + why);
+      return;
+    }
+    ptzstereo::point_cloud_t cloud =
+        makeCloud(depth_.points_head_m, depth_.colours_bgr, cloud_params_);
+    processing_ms_.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    cloud.utime = m.utime;
+    cloud.frame_seq = m.seq;
+    cloud.publish_utime = wallUtime();
+    lcm_->publish(ch_cloud_, &cloud);
+    status_.countOut(ch_cloud_, (cloud.publish_utime - m.utime) / 1000.0);
+    if (publish_disparity_) publishDisparity(m);
+    ++clouds_;
+    status_.increment("frames_processed");
+    status_.setCounter("points_per_cloud", cloud.width * cloud.height);
+    status_.increment("points_published", cloud.width * cloud.height);
+    status_.setCounter("min_disparity_px", depth_.min_disparity_px);
+    status_.setCounter("rectification_rebuilds", estimator_.rectifier().rebuilds());
+    if (target) status_.increment("frames_following_target");
+    maybeWritePcd(cloud);
+    if (processing_ms_.size() >= 10) {
+      status_.setCounter("processing_us_p50",
+                         static_cast<int64_t>(percentile(processing_ms_, 50) * 1000));
+      status_.setCounter("processing_us_p99",
+                         static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
+      processing_ms_.clear();
+    }
+  }
+
+  void publishDisparity(const ptzstereo::stereo_frame_t& m) {
+    // Grey levels over the search range, 0 where there is no disparity.
+    const int num = estimator_.params().matcher.num_disparities;
+    cv::Mat grey;
+    depth_.disparity_16s.convertTo(grey, CV_8U, 255.0 / (16.0 * num),
+                                   -255.0 * depth_.min_disparity_px / num);
+    grey.setTo(0, depth_.disparity_16s < depth_.min_disparity_px * 16);
+    ptzstereo::image_t img = encodeImage(grey, ptzstereo::image_t::ENCODING_RAW, 0);
+    img.pan_rad = m.left.pan_rad;
+    img.tilt_rad = m.left.tilt_rad;
+    img.zoom = m.left.zoom;
+    lcm_->publish(ch_disparity_, &img);
+    status_.countOut(ch_disparity_, (wallUtime() - m.utime) / 1000.0);
+  }
+
+  void maybeWritePcd(const ptzstereo::point_cloud_t& cloud) {
+    if (pcd_path_.empty()) return;
+    const bool due = pcd_every_n_ > 0 ? (clouds_ - 1) % pcd_every_n_ == 0 : clouds_ == 1;
+    if (!due) return;
+    std::string path = pcd_path_;
+    const auto at = path.find("{seq}");
+    if (at != std::string::npos) path.replace(at, 5, std::to_string(cloud.frame_seq));
+    std::string error;
+    if (writePcd(cloud, path, &error)) {
+      status_.increment("pcd_written");
+      return;
+    }
+    status_.increment("pcd_write_errors");
+    status_.setState(ptzstereo::process_status_t::STATE_WARN, error);
+    log_.warn("pcd", "ptz-depth: " + error);
+  }
+
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  DepthEstimator estimator_;
+  CloudParams cloud_params_;
+  int64_t target_max_age_us_;
+  std::string pcd_path_;
+  int pcd_every_n_;
+  bool publish_disparity_;
+  std::string ch_frame_, ch_pose_, ch_cloud_, ch_disparity_;
+  std::optional<Eigen::Vector3d> target_head_m_;
+  int64_t target_utime_ = 0;
+  int64_t clouds_ = 0;
+  DepthFrame depth_;
+  std::vector<double> processing_ms_;
+  std::unique_ptr<SafeSubscription<ptzstereo::object_pose_t>> poses_;
+  std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
+};
+
+}  // namespace
+}  // namespace ptz::perception
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-depth",
+                "Dense stereo: rectifies every STEREO_FRAME with its own PTZ geometry, block "
+                "matching over a horopter that follows the OBJECT_POSE target, and publishes the "
+                "scene as a coloured PCL cloud in the head frame on POINT_CLOUD.");
+  perception::declare(params);
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    perception::DepthNode node(p, &lcm, rigFromParams(p));
+    return node.run();
+  });
+}

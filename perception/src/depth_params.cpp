@@ -1,0 +1,65 @@
+// The parameters of ptz-depth and ptz-depth-eval: declared once, read once.
+#include "perception/depth.hpp"
+#include "ptz/config.hpp"
+
+namespace ptz::perception {
+
+void declareDepthParams(Params& p) {
+  p.add("mode", "bm", "matcher: bm (the paper's block matching) or sgbm (quality mode)");
+  p.add("full_width", false, "pad the images so the left edge is matched too");
+  p.add("wls", false, "filter the disparity with ximgproc's WLS filter (fills holes)");
+  p.add("num_disparities", 64, "px", "width of the disparity search range, a multiple of 16");
+  p.add("min_disparity_px", 0, "px",
+        "start of the search range when neither target nor horopter_far_m sets it");
+  p.add("horopter_far_m", 10.0, "m",
+        "without a target the search range starts at this depth's disparity (<= 0: "
+        "min_disparity_px)");
+  p.add("follow_target", true, "centre the search range on the OBJECT_POSE target's disparity");
+  p.add("block_size_px", 11, "px", "BM: SAD window (odd)");
+  p.add("sgbm_block_size_px", 3, "px", "SGBM: matched block size (odd)");
+  p.add("prefilter_size_px", 7, "px", "BM: window of the normalising pre-filter");
+  p.add("prefilter_cap", 31, "", "clip of the pre-filtered image");
+  p.add("texture_threshold", 10, "", "BM: least texture in the window");
+  p.add("uniqueness_pct", 15, "%", "best match cost this much below the second best");
+  p.add("speckle_window_px", 100, "px", "largest speckle removed (0: off)");
+  p.add("speckle_range_px", 2, "px", "disparity variation inside a speckle");
+  p.add("lr_max_diff_px", 1, "px", "left-right consistency tolerance (< 0: off)");
+  p.add("wls_lambda", 8000.0, "", "WLS smoothness");
+  p.add("wls_sigma", 1.5, "", "WLS colour sensitivity");
+  p.add("min_depth_m", 0.3, "m", "nearest reconstructed depth");
+  p.add("max_depth_m", 20.0, "m", "farthest reconstructed depth");
+  p.add("cloud_stride_px", 4, "px",
+        "reproject every n-th pixel in x and y (the voxel grid would merge them anyway)");
+}
+
+DepthParams DepthParams::fromParams(const Params& p) {
+  DepthParams d;
+  MatcherParams& m = d.matcher;
+  m.mode = MatcherParams::parseMode(p.getString("mode"));
+  m.wls = p.getBool("wls");
+  m.full_width = p.getBool("full_width");
+  m.num_disparities = p.getInt("num_disparities");
+  m.block_size_px = p.getInt("block_size_px");
+  m.sgbm_block_size_px = p.getInt("sgbm_block_size_px");
+  m.prefilter_size_px = p.getInt("prefilter_size_px");
+  m.prefilter_cap = p.getInt("prefilter_cap");
+  m.texture_threshold = p.getInt("texture_threshold");
+  m.uniqueness_pct = p.getInt("uniqueness_pct");
+  m.speckle_window_px = p.getInt("speckle_window_px");
+  m.speckle_range_px = p.getInt("speckle_range_px");
+  m.lr_max_diff_px = p.getInt("lr_max_diff_px");
+  m.wls_lambda = p.getDouble("wls_lambda");
+  m.wls_sigma = p.getDouble("wls_sigma");
+  d.horopter.follow_target = p.getBool("follow_target");
+  d.horopter.far_depth_m = p.getDouble("horopter_far_m");
+  d.horopter.min_disparity_px = p.getInt("min_disparity_px");
+  d.min_depth_m = p.getDouble("min_depth_m");
+  d.max_depth_m = p.getDouble("max_depth_m");
+  d.cloud_stride_px = p.getInt("cloud_stride_px");
+  if (m.prefilter_size_px < 5 || m.prefilter_size_px % 2 == 0) {
+    throw ConfigError("parameter 'prefilter_size_px' must be odd and >= 5");
+  }
+  return d;
+}
+
+}  // namespace ptz::perception

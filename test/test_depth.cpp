@@ -1,0 +1,271 @@
+// ptz-depth's library against known answers: rectification against the rig model's projection,
+// the horopter, the Middlebury scores of ptz-depth-eval, and the cloud's layout and filters.
+#include <gtest/gtest.h>
+#include <unistd.h>
+#include <opencv2/calib3d.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "perception/cloud.hpp"
+#include "perception/depth.hpp"
+#include "perception/stereo_eval.hpp"
+#include "support/data_dir.hpp"
+
+using ptz::PtzPose;
+using ptz::Side;
+using ptz::StereoRig;
+namespace perception = ptz::perception;
+
+namespace {
+
+cv::Mat cameraMatrix(const ptz::Intrinsics& k) {
+  return (cv::Mat_<double>(3, 3) << k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+}
+
+// Rectified pixel of a head-frame point seen by `view` (distorted pixel, then undistorted and
+// rectified by OpenCV with the rectification's R and P).
+cv::Point2d rectifiedPixel(const ptz::CameraView& view, const cv::Mat& R, const cv::Mat& P,
+                           const Eigen::Vector3d& p_head) {
+  const Eigen::Vector2d px = view.project(p_head);
+  std::vector<cv::Point2d> in{{px.x(), px.y()}}, out;
+  cv::undistortPoints(in, out, cameraMatrix(view.intrinsics),
+                      cv::Mat(view.intrinsics.distortion, true), R, P);
+  return out[0];
+}
+
+bool inImage(const ptz::CameraView& v, const Eigen::Vector3d& p) {
+  const Eigen::Vector2d px = v.project(p);
+  return px.x() > 20 && px.y() > 20 && px.x() < v.width - 20 && px.y() < v.height - 20;
+}
+
+}  // namespace
+
+TEST(Rectifier, RowsAlignAndDisparityAndReprojectionMatchTheRigModel) {
+  const StereoRig rig = StereoRig::makeDefault();
+  const std::vector<std::pair<PtzPose, PtzPose>> poses = {
+      {{0, 0, 1}, {0, 0, 1}},
+      {{0.15, 0.05, 1}, {0.10, 0.05, 1}},        // panned, tilted, verged
+      {{0.10, 0.0, 1}, {-0.10, 0.0, 1}},         // strongly verged: negative disparities
+      {{0.05, -0.03, 2.5}, {0.04, -0.03, 2.4}},  // zoomed, zooms differ
+  };
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> ux(-1.5, 1.5), uy(-0.8, 0.8), uz(1.5, 8.0);
+  for (const auto& [lp, rp] : poses) {
+    perception::Rectifier rectifier(rig);
+    std::string why;
+    ASSERT_TRUE(rectifier.update(lp, rp, &why)) << why;
+    const perception::Rectification& r = rectifier.current();
+    const ptz::CameraView lv = rig.view(Side::kLeft, lp), rv = rig.view(Side::kRight, rp);
+    Eigen::Matrix4d head_rect = Eigen::Matrix4d::Identity();
+    head_rect.topLeftCorner<3, 3>() = r.rotation_head_rect;
+    head_rect.topRightCorner<3, 1>() = r.position_head_m;
+    cv::Mat H(4, 4, CV_64F);
+    for (int i = 0; i < 16; ++i) H.at<double>(i / 4, i % 4) = head_rect(i / 4, i % 4);
+    const cv::Mat M = H * r.Q;
+    int checked = 0;
+    for (int i = 0; i < 400; ++i) {
+      const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
+      if (!inImage(lv, p) || !inImage(rv, p)) continue;
+      const cv::Point2d l = rectifiedPixel(lv, r.R1, r.P1, p);
+      const cv::Point2d rr = rectifiedPixel(rv, r.R2, r.P2, p);
+      EXPECT_NEAR(l.y, rr.y, 0.01) << "rows not aligned";
+      EXPECT_NEAR(l.x - rr.x, r.disparityOf(p), 0.01);
+      std::vector<cv::Point3d> xyd{{l.x, l.y, l.x - rr.x}}, back;
+      cv::perspectiveTransform(xyd, back, M);
+      EXPECT_NEAR((Eigen::Vector3d(back[0].x, back[0].y, back[0].z) - p).norm(), 0, 1e-6 * p.z());
+      ++checked;
+    }
+    EXPECT_GT(checked, 30);
+  }
+  // Cameras verging at about 1.5 m: a point at 5 m has a negative disparity.
+  perception::Rectifier verged(rig);
+  std::string why;
+  ASSERT_TRUE(verged.update({0.10, 0, 1}, {-0.10, 0, 1}, &why));
+  EXPECT_LT(verged.current().disparityOf({0, 0, 5}), 0);
+  EXPECT_GT(verged.current().disparityOf({0, 0, 1}), 0);
+}
+
+TEST(Rectifier, RebuildsOnlyWhenThePoseChangesAndRefusesUnknownGeometry) {
+  perception::Rectifier rectifier(StereoRig::makeDefault());
+  std::string why;
+  ASSERT_TRUE(rectifier.update({0, 0, 1}, {0, 0, 1}, &why));
+  ASSERT_TRUE(rectifier.update({0, 0, 1}, {0, 0, 1}, &why));
+  EXPECT_EQ(rectifier.rebuilds(), 1);
+  ASSERT_TRUE(rectifier.update({0.01, 0, 1}, {0, 0, 1}, &why));
+  EXPECT_EQ(rectifier.rebuilds(), 2);
+  EXPECT_FALSE(rectifier.update({0, 0, 1}, {0, 0, 10.5}, &why));  // table ends at 10
+  EXPECT_NE(why.find("right camera"), std::string::npos) << why;
+  EXPECT_NE(why.find("zoom table"), std::string::npos) << why;
+  EXPECT_FALSE(rectifier.update({NAN, 0, 1}, {0, 0, 1}, &why));
+  EXPECT_FALSE(rectifier.update({0, 0, 0.5}, {0, 0, 1}, &why));
+  EXPECT_EQ(rectifier.rebuilds(), 2);
+}
+
+TEST(Horopter, CentredOnTheTargetElseEndsAtTheFarDepth) {
+  perception::Rectifier rectifier(StereoRig::makeDefault());
+  std::string why;
+  ASSERT_TRUE(rectifier.update({0.1, 0, 3}, {0.08, 0, 3}, &why));
+  const perception::Rectification& r = rectifier.current();
+  perception::HoropterParams p;
+  const Eigen::Vector3d target(0.4, 0.1, 3.0);
+  const double d = r.disparityOf(target);
+  const int min_d = perception::chooseMinDisparity(r, p, 64, target);
+  EXPECT_LE(min_d + 31, d);
+  EXPECT_GE(min_d + 33, d);
+  const int far = perception::chooseMinDisparity(r, p, 64, std::nullopt);
+  EXPECT_LE(far, r.disparityAtDepth(p.far_depth_m));
+  EXPECT_GT(far + 1, r.disparityAtDepth(p.far_depth_m));
+  p.follow_target = false;
+  EXPECT_EQ(perception::chooseMinDisparity(r, p, 64, target), far);
+  p.far_depth_m = 0;
+  p.min_disparity_px = -7;
+  EXPECT_EQ(perception::chooseMinDisparity(r, p, 64, target), -7);
+}
+
+namespace {
+
+struct MiddleburySet {
+  const char* folder;
+  const char *left, *right, *gt, *gt_right;
+  double scale;
+  int num_disparities;
+  double opencv_sgbm, opencv_bm;  // reference rows of ../shared/data/README.md
+};
+
+const MiddleburySet kSets[] = {
+    {"2001/tsukuba", "im3.png", "im4.png", "disp3.pgm", "", 16, 16, 0.044, 0.123},
+    {"2001/venus", "im2.png", "im6.png", "disp2.pgm", "", 8, 32, 0.147, 0.124},
+    {"2003/teddy", "im2.png", "im6.png", "disp2.png", "", 4, 64, 0.149, 0.199},
+    {"2003/cones", "im2.png", "im6.png", "disp2.png", "disp6.png", 4, 64, 0.141, 0.173},
+};
+
+// Runs ptz-depth-eval and returns its JSON line.
+std::string runEval(const MiddleburySet& s, const std::string& dir, const std::string& flags) {
+  std::ostringstream cmd;
+  cmd << PTZ_DEPTH_EVAL_BIN << " --left " << dir << s.left << " --right " << dir << s.right
+      << " --gt " << dir << s.gt << " --scale " << s.scale << " --num-disparities "
+      << s.num_disparities << " " << flags;
+  if (*s.gt_right) cmd << " --gt-right " << dir << s.gt_right;
+  FILE* pipe = popen(cmd.str().c_str(), "r");
+  std::string out;
+  char buf[512];
+  while (pipe && fgets(buf, sizeof buf, pipe)) out += buf;
+  if (pipe) {
+    EXPECT_EQ(pclose(pipe), 0) << cmd.str();
+  }
+  return out;
+}
+
+double jsonNumber(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return NAN;
+  return std::stod(json.substr(at + key.size() + 4));
+}
+
+}  // namespace
+
+// BM: the paper's matcher (normalised 7x7 pre-filter, SAD window) over the full width; the
+// filters that only remove pixels are off, as the score counts a removed pixel as bad.
+// SGBM: the quality mode with its defaults, over the full width.
+TEST(Middlebury, BmAndSgbmNoWorseThanOpenCvsReferenceOnEverySet) {
+  const std::string root = ptz::test::dataDir() + "/middlebury/";
+  if (!ptz::test::exists(root)) GTEST_SKIP() << "no Middlebury data in " << root;
+  for (const auto& s : kSets) {
+    const std::string dir = root + s.folder + "/";
+    const std::string bm = runEval(s, dir,
+                                   "--mode bm --full-width true --uniqueness-pct 0 "
+                                   "--speckle-window-px 0 --lr-max-diff-px -1");
+    const std::string sgbm = runEval(s, dir, "--mode sgbm --full-width true");
+    const std::string wls = runEval(s, dir, "--mode sgbm --full-width true --wls true");
+    std::printf("%s bm: %s%s sgbm: %s%s sgbm+wls: %s", s.folder, bm.c_str(), s.folder, sgbm.c_str(),
+                s.folder, wls.c_str());
+    EXPECT_LE(jsonNumber(bm, "bad_nonocc"), s.opencv_bm) << s.folder;
+    EXPECT_LE(jsonNumber(sgbm, "bad_nonocc"), s.opencv_sgbm) << s.folder;
+    // WLS fills (nearly) every pixel; it trades some accuracy at edges for that (still better than
+    // BM's reference).
+    EXPECT_LT(jsonNumber(wls, "invalid_fraction"), 0.001) << s.folder;
+    EXPECT_LE(jsonNumber(wls, "bad_nonocc"), s.opencv_bm) << s.folder;
+    EXPECT_GE(jsonNumber(bm, "bad_all"), jsonNumber(bm, "bad_nonocc")) << s.folder;
+  }
+}
+
+TEST(Middlebury, ScoringCountsInvalidAsBadSkipsUnknownAndTheBorder) {
+  cv::Mat gt(40, 40, CV_32F, cv::Scalar(5.0f));
+  gt(cv::Rect(0, 0, 40, 20)).setTo(0);  // top half unknown
+  cv::Mat disp = gt.clone();
+  disp.at<float>(25, 15) = NAN;  // invalid: bad
+  disp.at<float>(26, 15) = 6.5;  // 1.5 px off: bad
+  disp.at<float>(27, 15) = 5.9;  // 0.9 px off: good
+  disp.at<float>(35, 35) = 0;    // in the border: ignored
+  const cv::Mat all(gt.size(), CV_8U, cv::Scalar(255));
+  const perception::StereoScore s = perception::scoreDisparity(disp, gt, all, 10, 1.0);
+  EXPECT_EQ(s.known_px, 20 * 10);  // rows 20..29, columns 10..29
+  EXPECT_DOUBLE_EQ(s.bad_all, 2.0 / 200);
+  EXPECT_DOUBLE_EQ(s.invalid_fraction, 1.0 / 200);
+  // A near surface (d = 9) at columns 20..29 hides the far one (d = 5) that would land there.
+  cv::Mat step(1, 40, CV_32F, cv::Scalar(5.0f));
+  step.colRange(20, 30).setTo(9.0f);
+  const cv::Mat mask = perception::nonOccludedMask(step, cv::Mat());
+  EXPECT_EQ(mask.at<uint8_t>(0, 2), 0);     // x - d < 0: outside the right image
+  EXPECT_EQ(mask.at<uint8_t>(0, 10), 255);  // lands on 5, nothing nearer there
+  EXPECT_EQ(mask.at<uint8_t>(0, 17), 0);    // lands on 12, where d = 9 pixels land too
+  EXPECT_EQ(mask.at<uint8_t>(0, 25), 255);
+}
+
+TEST(Cloud, PclLayoutVoxelGridAndOutlierRemoval) {
+  std::vector<cv::Point3f> points;
+  std::vector<cv::Vec3b> colours;
+  // A 1 m square at z = 3 m sampled every 5 mm, and one point far off it.
+  for (int i = 0; i < 200; ++i) {
+    for (int j = 0; j < 200; ++j) {
+      points.emplace_back(-0.5f + i * 0.005f, -0.5f + j * 0.005f, 3.0f);
+      colours.emplace_back(10, 20, 30);
+    }
+  }
+  points.emplace_back(0.0f, 0.0f, 4.0f);
+  colours.emplace_back(10, 20, 30);
+  perception::CloudParams p;
+  p.voxel_size_m = 0.02;
+  const ptzstereo::point_cloud_t c = perception::makeCloud(points, colours, p);
+  EXPECT_EQ(c.frame_id, "head");
+  EXPECT_EQ(c.height, 1);
+  EXPECT_EQ(c.point_step, 32);  // pcl::PointXYZRGB
+  EXPECT_EQ(c.data_size, c.width * c.point_step);
+  std::map<std::string, int> offsets;
+  for (const auto& f : c.fields) {
+    offsets[f.name] = f.offset;
+    EXPECT_EQ(f.datatype, ptzstereo::point_field_t::FLOAT32) << f.name;
+  }
+  EXPECT_EQ(offsets, (std::map<std::string, int>{{"x", 0}, {"y", 4}, {"z", 8}, {"rgb", 16}}));
+  // 2 cm voxels on a 1 m square: 50 x 50 (a few more where the grid straddles a boundary).
+  EXPECT_NEAR(c.width, 2500, 150);
+  std::vector<cv::Point3f> back;
+  ASSERT_TRUE(perception::cloudPoints(c, &back));
+  ASSERT_EQ(back.size(), static_cast<size_t>(c.width));
+  for (const auto& q : back) EXPECT_NEAR(q.z, 3.0f, 1e-4) << "the outlier is removed";
+  // rgb packs r, g, b as PCL does (b in the lowest byte).
+  uint32_t rgb = 0;
+  std::memcpy(&rgb, c.data.data() + 16, 4);
+  EXPECT_EQ(rgb & 0xffffffu, (30u << 16) | (20u << 8) | 10u);
+}
+
+TEST(Cloud, PcdWrittenOrAClearError) {
+  const ptzstereo::point_cloud_t c =
+      perception::makeCloud({{0, 0, 1}, {0, 0.1f, 1}}, {{1, 2, 3}, {4, 5, 6}}, {0.0, 0, 2.0});
+  const std::string path = ::testing::TempDir() + "ptz_depth_test.pcd";
+  std::string error;
+  ASSERT_TRUE(perception::writePcd(c, path, &error)) << error;
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.rfind("# .PCD", 0), 0u);
+  EXPECT_NE(text.find("POINTS 2"), std::string::npos);
+  EXPECT_NE(text.find("FIELDS x y z"), std::string::npos);  // PCL's padding shows as "_"
+  EXPECT_NE(text.find(" rgb"), std::string::npos);
+  std::remove(path.c_str());
+  EXPECT_FALSE(perception::writePcd(c, "/nonexistent-dir/cloud.pcd", &error));
+  EXPECT_NE(error.find("/nonexistent-dir/cloud.pcd"), std::string::npos) << error;
+}
