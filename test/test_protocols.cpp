@@ -2,10 +2,13 @@
 // protocol documents, and the reply parsers fed random bytes (no crash, no hang, bounded).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
+#include "ptz/config.hpp"
 #include "ptz_driver/pelco_d.hpp"
 #include "ptz_driver/visca.hpp"
+#include "ptz_driver/visca_camera.hpp"
 
 using ptz::driver::Bytes;
 namespace visca = ptz::driver::visca;
@@ -156,4 +159,55 @@ TEST(Protocols, ReplyParsersSurviveRandomBytes) {
   EXPECT_GE(acks_seen, acks_fed);  // random bytes may add some, never lose one
   EXPECT_GT(v.malformed(), 0);
   EXPECT_GT(pd.badChecksums() + pd.skippedBytes(), 0);
+}
+
+namespace {
+const std::string kD70 = PTZ_SOURCE_DIR "/config/visca/sony_evi_d70.yaml";
+const std::string kSrg = PTZ_SOURCE_DIR "/config/visca/sony_srg300.yaml";
+}  // namespace
+
+TEST(ViscaCamera, TheModelFileGivesTheDocumentedUnits) {
+  const auto d70 = ptz::driver::ViscaModel::load(kD70);
+  EXPECT_EQ(d70.panUnits(170 * M_PI / 180), 0x08DB);  // EVI-D70 manual: +170 deg
+  EXPECT_EQ(d70.panUnits(-170 * M_PI / 180), -0x08DB);
+  EXPECT_EQ(d70.panUnits(3.0), 0x08DB);  // clamped to the head's range
+  EXPECT_EQ(d70.zoomPosition(4.0), 10336);
+  EXPECT_NEAR(d70.zoomRatio(d70.zoomPosition(2.5)), 2.5, 1e-3);
+  EXPECT_THROW(ptz::driver::ViscaModel::load("/nonexistent.yaml"), ptz::ConfigError);
+}
+
+TEST(ViscaCamera, TheEmulatorAnswersAsTheCameraDoes) {
+  const ptz::driver::ViscaCameraEmulator cam(ptz::driver::ViscaModel::load(kD70), 1);
+  ptz::driver::ViscaTarget target;
+  const ptz::PtzPose at{-170 * M_PI / 180, 0.0, 4.0};
+  // Position inquiry at -170 deg: the manual's F725.
+  auto replies = cam.handle(visca::panTiltPositionInquiry(1), at, &target);
+  ASSERT_EQ(replies.size(), 1u);
+  EXPECT_EQ(replies[0], (Bytes{0x90, 0x50, 0x0F, 0x07, 0x02, 0x05, 0x00, 0x00, 0x00, 0x00, 0xFF}));
+  replies = cam.handle(visca::zoomPositionInquiry(1), at, &target);
+  EXPECT_EQ(replies[0], (Bytes{0x90, 0x50, 0x02, 0x08, 0x06, 0x00, 0xFF}));  // 10336 = 0x2860
+  // An absolute move: ACK, completion, and the target in radians.
+  replies = cam.handle(visca::panTiltAbsolute(1, 24, 20, 0x0400, -0x0100, 4), at, &target);
+  ASSERT_EQ(replies.size(), 2u);
+  EXPECT_EQ(replies[0], (Bytes{0x90, 0x41, 0xFF}));
+  EXPECT_EQ(replies[1], (Bytes{0x90, 0x51, 0xFF}));
+  ASSERT_TRUE(target.pan_rad && target.tilt_rad);
+  EXPECT_NEAR(*target.pan_rad, 0x0400 / 13.335 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(*target.tilt_rad, -0x0100 / 13.335 * M_PI / 180, 1e-12);
+  // A command it does not know, and a packet of the wrong length for this model (5 nibbles).
+  replies = cam.handle({0x81, 0x01, 0x7E, 0x01, 0xFF}, at, &target);
+  EXPECT_EQ(replies[0], (Bytes{0x90, 0x60, 0x02, 0xFF}));
+  replies = cam.handle(visca::panTiltAbsolute(1, 24, 20, 0, 0, 5), at, &target);
+  EXPECT_EQ(replies[0], (Bytes{0x90, 0x60, 0x02, 0xFF}));
+  EXPECT_FALSE(target.pan_rad);
+  // The SRG model's 5 nibbles round-trip through the driver's encoder and decoder.
+  const ptz::driver::ViscaCameraEmulator srg(ptz::driver::ViscaModel::load(kSrg), 1);
+  replies = srg.handle(visca::panTiltPositionInquiry(1), {1.0, 0.2, 1.0}, &target);
+  visca::ReplyParser parser;
+  parser.feed(replies[0].data(), replies[0].size());
+  int32_t pan = 0, tilt = 0;
+  ASSERT_TRUE(visca::decodePanTiltPosition(*parser.next(), 5, &pan, &tilt));
+  EXPECT_EQ(pan, srg.model().panUnits(1.0));
+  EXPECT_NEAR(srg.model().panRad(pan), 1.0, 0.5 / srg.model().pan_units_per_rad);
+  EXPECT_NEAR(srg.model().tiltRad(tilt), 0.2, 0.5 / srg.model().tilt_units_per_rad);
 }

@@ -1,0 +1,130 @@
+#include "ptz_driver/visca_camera.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ptz/config.hpp"
+
+namespace ptz::driver {
+
+ViscaModel ViscaModel::load(const std::string& path) {
+  const std::string where = "VISCA model file '" + path + "'";
+  cv::FileStorage fs = openForRead(path, "VISCA model file");
+  const cv::FileNode root = fs.root();
+  ViscaModel m;
+  m.name = readString(root, "name", where);
+  m.pan_nibbles = readInt(root, "pan_nibbles", where);
+  if (m.pan_nibbles != 4 && m.pan_nibbles != 5) {
+    throw ConfigError(where + ": field 'pan_nibbles' must be 4 or 5");
+  }
+  const double deg = M_PI / 180;
+  m.pan_units_per_rad = readDouble(root, "pan_units_per_deg", where) / deg;
+  m.tilt_units_per_rad = readDouble(root, "tilt_units_per_deg", where) / deg;
+  m.pan_min_rad = readDouble(root, "pan_min_deg", where) * deg;
+  m.pan_max_rad = readDouble(root, "pan_max_deg", where) * deg;
+  m.tilt_min_rad = readDouble(root, "tilt_min_deg", where) * deg;
+  m.tilt_max_rad = readDouble(root, "tilt_max_deg", where) * deg;
+  m.pan_speed_max = readInt(root, "pan_speed_max", where);
+  m.tilt_speed_max = readInt(root, "tilt_speed_max", where);
+  const cv::FileNode zp = readNode(root, "zoom_positions", where);
+  const cv::FileNode zr = readNode(root, "zoom_ratios", where);
+  for (const auto& n : zp) m.zoom_positions.push_back(static_cast<double>(n));
+  for (const auto& n : zr) m.zoom_ratios.push_back(static_cast<double>(n));
+  if (m.zoom_positions.size() < 2 || m.zoom_positions.size() != m.zoom_ratios.size() ||
+      !std::is_sorted(m.zoom_positions.begin(), m.zoom_positions.end()) ||
+      !std::is_sorted(m.zoom_ratios.begin(), m.zoom_ratios.end())) {
+    throw ConfigError(where +
+                      ": fields 'zoom_positions' and 'zoom_ratios' must be increasing "
+                      "lists of the same length (at least 2)");
+  }
+  if (!(m.pan_units_per_rad > 0) || !(m.tilt_units_per_rad > 0) || m.pan_min_rad >= m.pan_max_rad ||
+      m.tilt_min_rad >= m.tilt_max_rad) {
+    throw ConfigError(where + ": units per degree must be > 0 and each min below its max");
+  }
+  return m;
+}
+
+int32_t ViscaModel::panUnits(double pan_rad) const {
+  return static_cast<int32_t>(
+      std::lround(std::clamp(pan_rad, pan_min_rad, pan_max_rad) * pan_units_per_rad));
+}
+
+int32_t ViscaModel::tiltUnits(double tilt_rad) const {
+  return static_cast<int32_t>(
+      std::lround(std::clamp(tilt_rad, tilt_min_rad, tilt_max_rad) * tilt_units_per_rad));
+}
+
+namespace {
+// Piecewise-linear lookup in an increasing table.
+double interpolate(const std::vector<double>& from, const std::vector<double>& to, double x) {
+  if (x <= from.front()) return to.front();
+  if (x >= from.back()) return to.back();
+  const auto it = std::upper_bound(from.begin(), from.end(), x);
+  const size_t i = static_cast<size_t>(it - from.begin());
+  const double a = (x - from[i - 1]) / (from[i] - from[i - 1]);
+  return to[i - 1] + a * (to[i] - to[i - 1]);
+}
+}  // namespace
+
+int ViscaModel::zoomPosition(double ratio) const {
+  return static_cast<int>(std::lround(interpolate(zoom_ratios, zoom_positions, ratio)));
+}
+
+double ViscaModel::zoomRatio(int position) const {
+  return interpolate(zoom_positions, zoom_ratios, position);
+}
+
+Bytes ViscaCameraEmulator::reply(std::initializer_list<uint8_t> body) const {
+  Bytes b(body.size() + 2);
+  b[0] = static_cast<uint8_t>((address_ + 8) << 4);
+  std::copy(body.begin(), body.end(), b.begin() + 1);
+  b.back() = 0xFF;
+  return b;
+}
+
+std::vector<Bytes> ViscaCameraEmulator::handle(const Bytes& p, const PtzPose& now,
+                                               ViscaTarget* target) const {
+  *target = {};
+  if (p.size() < 3 || p.back() != 0xFF || (p[0] & 0xF0) != 0x80) {
+    return {reply({0x60, visca::kMessageLength})};
+  }
+  const size_t n = p.size();
+  // Commands: 8x 01 ...; ACK on socket 1, then completion.
+  if (p[1] == 0x01 && n >= 5 && p[2] == 0x06 && p[3] == 0x02 &&
+      n == static_cast<size_t>(6 + model_.pan_nibbles + 4 + 1)) {
+    target->pan_rad = model_.panRad(visca::readNibbles(&p[6], model_.pan_nibbles, true));
+    target->tilt_rad = model_.tiltRad(
+        visca::readNibbles(&p[6 + static_cast<size_t>(model_.pan_nibbles)], 4, true));
+    return {reply({0x41}), reply({0x51})};
+  }
+  if (p[1] == 0x01 && n == 9 && p[2] == 0x06 && p[3] == 0x01) {  // stop: hold where it is
+    target->pan_rad = now.pan_rad;
+    target->tilt_rad = now.tilt_rad;
+    return {reply({0x41}), reply({0x51})};
+  }
+  if (p[1] == 0x01 && n == 9 && p[2] == 0x04 && p[3] == 0x47) {
+    target->zoom = model_.zoomRatio(visca::readNibbles(&p[4], 4, false));
+    return {reply({0x41}), reply({0x51})};
+  }
+  if (p[1] == 0x01 && n == 6 && p[2] == 0x04 && p[3] == 0x07 && p[4] == 0x00) {
+    target->zoom = now.zoom;
+    return {reply({0x41}), reply({0x51})};
+  }
+  // Inquiries: 8x 09 ...
+  if (p[1] == 0x09 && n == 5 && p[2] == 0x06 && p[3] == 0x12) {
+    Bytes r = {static_cast<uint8_t>((address_ + 8) << 4), 0x50};
+    visca::putNibbles(&r, model_.panUnits(now.pan_rad), model_.pan_nibbles);
+    visca::putNibbles(&r, model_.tiltUnits(now.tilt_rad), 4);
+    r.push_back(0xFF);
+    return {r};
+  }
+  if (p[1] == 0x09 && n == 5 && p[2] == 0x04 && p[3] == 0x47) {
+    Bytes r = {static_cast<uint8_t>((address_ + 8) << 4), 0x50};
+    visca::putNibbles(&r, model_.zoomPosition(now.zoom), 4);
+    r.push_back(0xFF);
+    return {r};
+  }
+  return {reply({0x60, visca::kSyntax})};
+}
+
+}  // namespace ptz::driver
