@@ -1,6 +1,9 @@
 // ptz-sim: renders the stereo pair and models the PTZ motors; speaks the same channels as
 // ptz-camera + ptz-driver. Clocks: realtime, or lockstep (sim time advances one frame once the
 // frame's consumer answered with a setpoint naming it, or after a timeout).
+#include <poll.h>
+
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +13,7 @@
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "sim/simulator.hpp"
 #include "sim_messages.hpp"
+#include "visca_server.hpp"
 
 namespace ptz::sim {
 namespace {
@@ -32,6 +36,10 @@ void declare(Params& p) {
   p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)");
   p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time");
   p.add("max_setpoint_age_ms", 500.0, "ms", "realtime: drop setpoints published longer ago");
+  p.add("visca_port", 0, "",
+        "realtime: serve the heads as VISCA-over-IP cameras on 127.0.0.1 at this UDP port "
+        "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)");
+  p.add("visca_model", "", "VISCA camera model file the heads pretend to be (visca_port)");
   p.addSection("scene", "backdrop_distance_m, floor_height_m, texture_m_per_texel, texture_seed");
   p.addSection("objects",
                "list of {name, class, shape: sphere|box, radius_m | half_extents_m, "
@@ -61,9 +69,19 @@ class SimNode {
     sim_ = std::make_unique<Simulator>(rigFromParams(p), std::move(scene), plantParamsFrom(p),
                                        p.getDouble("noise_sigma"),
                                        static_cast<unsigned>(p.getInt("seed")));
-    setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
-        *lcm_, ch_setpoint_, status_,
-        [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); });
+    if (p.getInt("visca_port") > 0) {
+      // Real cameras do not speak LCM: ptz-driver commands them and publishes PTZ_STATE.
+      if (lockstep_) throw ConfigError("parameter 'visca_port' needs clock realtime");
+      if (p.getString("visca_model").empty()) {
+        throw ConfigError("parameter 'visca_port' needs 'visca_model' (a VISCA model file)");
+      }
+      visca_ = std::make_unique<ViscaServer>(driver::ViscaModel::load(p.getString("visca_model")),
+                                             "127.0.0.1", p.getInt("visca_port"));
+    } else {
+      setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
+          *lcm_, ch_setpoint_, status_,
+          [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); });
+    }
     start_wall_utime_ = wallUtime();
     start_steady_ = std::chrono::steady_clock::now();
   }
@@ -116,6 +134,7 @@ class SimNode {
         // Setpoints that arrived meanwhile act now, even when the frames run late.
         while (lcm_->handleTimeout(0) > 0) {
         }
+        if (visca_) waitForInput(0);
         if (now - t_frame > frame_period_s_) {
           status_.increment("frames_skipped_late");
           return false;
@@ -128,12 +147,38 @@ class SimNode {
         advanceWithStates(now);
         continue;
       }
-      lcm_->handleTimeout(std::max(1, static_cast<int>((until - now) * 1000)));
+      waitForInput(std::max(1, static_cast<int>((until - now) * 1000)));
       status_.maybePublish();
     }
   }
 
+  // LCM messages, and VISCA datagrams when the heads are VISCA cameras.
+  void waitForInput(int timeout_ms) {
+    if (!visca_) {
+      lcm_->handleTimeout(timeout_ms);
+      return;
+    }
+    pollfd fds[3] = {{lcm_->getFileno(), POLLIN, 0},
+                     {visca_->fd(Side::kLeft), POLLIN, 0},
+                     {visca_->fd(Side::kRight), POLLIN, 0}};
+    if (::poll(fds, 3, timeout_ms) <= 0) return;
+    if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
+    if (!((fds[1].revents | fds[2].revents) & POLLIN)) return;
+    const double t_apply = std::max(sim_->time(), realtimeNow());
+    advanceWithStates(t_apply);
+    const std::array<PtzPose, 2> now = {sim_->plant().pose(Side::kLeft),
+                                        sim_->plant().pose(Side::kRight)};
+    if (visca_->serve(now, &visca_setpoints_)) {
+      int clamped = 0, rejected = 0;
+      sim_->command(t_apply, visca_setpoints_[0], visca_setpoints_[1], &clamped, &rejected);
+      status_.increment("visca_setpoints_applied");
+    }
+    status_.setCounter("visca_packets", visca_->packets());
+    status_.setCounter("visca_malformed", visca_->malformed());
+  }
+
   void publishState() {
+    if (visca_) return;  // ptz-driver publishes the state it reads from the cameras
     ptzstereo::ptz_state_t msg = makeStateMessage(sim_->plant(), simUtime(sim_->time()));
     msg.setpoint_utime = last_setpoint_utime_;
     msg.publish_utime = wallUtime();
@@ -223,6 +268,8 @@ class SimNode {
   std::string ch_frame_, ch_state_, ch_truth_, ch_setpoint_;
   std::unique_ptr<Simulator> sim_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
+  std::unique_ptr<ViscaServer> visca_;
+  std::array<PtzPose, 2> visca_setpoints_{PtzPose{0, 0, 1}, PtzPose{0, 0, 1}};
   int64_t start_wall_utime_ = 0;
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;

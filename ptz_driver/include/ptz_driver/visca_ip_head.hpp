@@ -1,0 +1,66 @@
+// One PTZ camera over VISCA over IP: absolute pan-tilt and zoom commands, position inquiries,
+// replies matched to requests by sequence number, round-trip times, errors by name. Inquiries
+// not answered within the timeout are sent again; a "command buffer full" error makes the next
+// command wait for the buffer to drain (a reply) instead of piling on.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ptz/rig.hpp"
+#include "ptz_driver/udp.hpp"
+#include "ptz_driver/visca_camera.hpp"
+
+namespace ptz::driver {
+
+class ViscaIpHead {
+ public:
+  // Connects to host:port; throws std::runtime_error naming it when the address is bad.
+  ViscaIpHead(ViscaModel model, const std::string& host, int port, int address = 1);
+
+  // Resets the camera's sequence number (Sony's RESET control command).
+  void start(double now_s);
+  // Moves to pose (clamped to the model's range); only sends what changed by a unit or more.
+  void command(const PtzPose& pose, double now_s);
+  // Stops pan, tilt and zoom where they are.
+  void stop(double now_s);
+  // Asks where the head is, unless an inquiry is already out and not yet timed out.
+  void inquire(double now_s, double timeout_s);
+  // Reads every waiting reply.
+  void receive(double now_s);
+
+  // The last measured pose and the time it was measured (mid round trip); nullopt before.
+  std::optional<PtzPose> measured() const;
+  double measuredAtS() const { return measured_at_s_; }
+  int fd() const { return socket_.fd(); }
+  const ViscaModel& model() const { return model_; }
+
+  struct Stats {
+    int64_t sent = 0, replies = 0, errors = 0, timeouts = 0, buffer_full = 0, malformed = 0;
+    std::vector<double> round_trip_ms;  // of inquiries; cleared by whoever reads it
+    std::string last_error;
+  };
+  Stats& stats() { return stats_; }
+
+ private:
+  enum class Request { kPanTiltInquiry, kZoomInquiry, kCommand, kReset };
+  void send(uint16_t type, const Bytes& payload, Request what, double now_s);
+
+  ViscaModel model_;
+  int address_;
+  UdpSocket socket_;
+  uint32_t sequence_ = 0;
+  std::map<uint32_t, std::pair<Request, double>> outstanding_;  // sequence -> (what, sent at)
+  std::optional<int32_t> pan_units_, tilt_units_;
+  std::optional<int> zoom_position_;
+  double measured_at_s_ = 0;
+  double inquiry_sent_s_ = -1;
+  std::optional<int32_t> sent_pan_, sent_tilt_;
+  std::optional<int> sent_zoom_;
+  bool buffer_full_ = false;
+  Stats stats_;
+};
+
+}  // namespace ptz::driver

@@ -1,0 +1,238 @@
+// ptz-driver: PTZ_SETPOINT -> the heads' motors -> PTZ_STATE, for real heads (here: VISCA over
+// IP; the simulator can pose as such cameras with --visca-port). Safety whatever arrives:
+// setpoints are clamped to the limits and slewed at most max_setpoint_rate, stale ones are
+// dropped, without a fresh one for deadman_s the heads hold where they are, and they stop on
+// exit (SIGINT/SIGTERM).
+#include <poll.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <memory>
+
+#include "ptz/plant.hpp"
+#include "ptz/transport.hpp"
+#include "ptz_driver/visca_ip_head.hpp"
+#include "ptzstereo/ptz_setpoint_t.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+
+namespace ptz::driver {
+namespace {
+
+void declare(Params& p) {
+  addTransportParams(p);
+  addPlantParams(p);  // the limits every setpoint is clamped to
+  p.add("backend", "visca_ip", "visca_ip (serial VISCA, Pelco-D and GPIO heads: not yet)");
+  p.add("visca_model", "", "VISCA camera model file (config/visca/*.yaml); required");
+  p.add("left_host", "127.0.0.1", "left camera's IPv4 address");
+  p.add("left_port", 52381, "", "left camera's VISCA-over-IP UDP port");
+  p.add("right_host", "127.0.0.1", "right camera's IPv4 address");
+  p.add("right_port", 52382, "", "right camera's VISCA-over-IP UDP port");
+  p.add("state_rate_hz", 50.0, "Hz", "position inquiries and PTZ_STATE per second");
+  p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time");
+  p.add("deadman_s", 0.25, "s", "without a fresh setpoint for this long the heads hold");
+  p.add("max_setpoint_age_s", 0.5, "s", "setpoints published longer ago are dropped");
+  p.add("max_setpoint_rate", 3.0, "rad/s", "commanded pan/tilt change at most this fast");
+}
+
+double clampAxis(double v, const AxisParams& a) {
+  return std::clamp(v, a.min_position, a.max_position);
+}
+
+class DriverNode {
+ public:
+  DriverNode(const Params& p, lcm::LCM* lcm)
+      : p_(p),
+        lcm_(lcm),
+        status_(lcm, p, "ptz-driver"),
+        limits_(plantParamsFrom(p)),
+        ch_setpoint_(channel(p, channels::kPtzSetpoint)),
+        ch_state_(channel(p, channels::kPtzState)) {
+    if (p.getString("backend") != "visca_ip") {
+      throw ConfigError("parameter 'backend': only visca_ip is implemented so far, got '" +
+                        p.getString("backend") + "'");
+    }
+    if (p.getString("visca_model").empty())
+      throw ConfigError("parameter 'visca_model' is required");
+    const ViscaModel model = ViscaModel::load(p.getString("visca_model"));
+    heads_[0] =
+        std::make_unique<ViscaIpHead>(model, p.getString("left_host"), p.getInt("left_port"));
+    heads_[1] =
+        std::make_unique<ViscaIpHead>(model, p.getString("right_host"), p.getInt("right_port"));
+    setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
+        *lcm_, ch_setpoint_, status_,
+        [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },
+        1);
+  }
+
+  int run() {
+    const double period_s = 1.0 / p_.getDouble("state_rate_hz");
+    for (auto& h : heads_) h->start(nowS());
+    status_.publishNow();
+    double next_tick = nowS();
+    while (!StopFlag::stopRequested()) {
+      pollfd fds[3] = {{lcm_->getFileno(), POLLIN, 0},
+                       {heads_[0]->fd(), POLLIN, 0},
+                       {heads_[1]->fd(), POLLIN, 0}};
+      const int wait_ms = std::max(0, static_cast<int>((next_tick - nowS()) * 1000));
+      ::poll(fds, 3, wait_ms);
+      if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
+      for (auto& h : heads_) h->receive(nowS());
+      if (nowS() >= next_tick) {
+        tick(period_s);
+        next_tick += period_s;
+        if (next_tick < nowS()) next_tick = nowS() + period_s;  // fell behind: do not burst
+      }
+      status_.maybePublish();
+    }
+    for (auto& h : heads_) h->stop(nowS());  // motion stops on exit
+    status_.publishNow();
+    return 0;
+  }
+
+ private:
+  static double nowS() { return wallUtime() * 1e-6; }
+
+  void onSetpoint(const std::string& ch, const ptzstereo::ptz_setpoint_t& m) {
+    const double age_s = nowS() - m.publish_utime * 1e-6;
+    if (age_s > p_.getDouble("max_setpoint_age_s") || age_s < -1.0) {
+      status_.countDropped(ch, "setpoint_stale");
+      return;
+    }
+    const std::array<ptzstereo::ptz_head_setpoint_t, 2> heads = {m.left, m.right};
+    for (const auto& h : heads) {
+      if (!std::isfinite(h.pan_rad) || !std::isfinite(h.tilt_rad) || !std::isfinite(h.zoom)) {
+        status_.countDropped(ch, "nonfinite");
+        log_.warn("nonfinite", "ptz-driver: setpoint with non-finite values dropped");
+        return;
+      }
+    }
+    status_.countIn(ch, (wallUtime() - m.publish_utime) / 1000.0);
+    for (int i = 0; i < 2; ++i) {
+      target_[static_cast<size_t>(i)] =
+          PtzPose{clampAxis(heads[static_cast<size_t>(i)].pan_rad, limits_.axis[0]),
+                  clampAxis(heads[static_cast<size_t>(i)].tilt_rad, limits_.axis[1]),
+                  clampAxis(heads[static_cast<size_t>(i)].zoom, limits_.axis[2])};
+    }
+    last_setpoint_s_ = nowS();
+    last_setpoint_utime_ = m.utime;
+    holding_ = false;
+  }
+
+  void tick(double period_s) {
+    const double now = nowS();
+    // Deadman: no fresh setpoint -> hold where the heads are, once.
+    if (target_[0] && !holding_ && now - last_setpoint_s_ > p_.getDouble("deadman_s")) {
+      holding_ = true;
+      status_.increment("deadman_holds");
+      log_.warn("deadman", "ptz-driver: no fresh setpoint; holding");
+      for (size_t i = 0; i < 2; ++i) {
+        if (const auto m = heads_[i]->measured()) target_[i] = *m;
+      }
+    }
+    for (size_t i = 0; i < 2; ++i) {
+      if (target_[i]) {
+        const auto measured = heads_[i]->measured();
+        PtzPose& c = commanded_[i];
+        if (!started_[i]) {
+          c = measured.value_or(*target_[i]);
+          started_[i] = true;
+        }
+        const double step = p_.getDouble("max_setpoint_rate") * period_s;
+        c.pan_rad += std::clamp(target_[i]->pan_rad - c.pan_rad, -step, step);
+        c.tilt_rad += std::clamp(target_[i]->tilt_rad - c.tilt_rad, -step, step);
+        c.zoom = target_[i]->zoom;
+        heads_[i]->command(c, now);
+      }
+      heads_[i]->inquire(now, p_.getDouble("inquiry_timeout_s"));
+    }
+    publishState();
+    report();
+  }
+
+  void publishState() {
+    const auto l = heads_[0]->measured(), r = heads_[1]->measured();
+    if (!l || !r) return;
+    const double t = std::min(heads_[0]->measuredAtS(), heads_[1]->measuredAtS());
+    if (t <= last_state_s_) return;  // nothing new
+    last_state_s_ = t;
+    ptzstereo::ptz_state_t msg{};
+    msg.utime = static_cast<int64_t>(t * 1e6);
+    auto head = [](const PtzPose& p) {
+      ptzstereo::ptz_head_state_t h{};
+      h.pan_rad = p.pan_rad;
+      h.tilt_rad = p.tilt_rad;
+      h.zoom = p.zoom;
+      return h;
+    };
+    msg.left = head(*l);
+    msg.right = head(*r);
+    msg.setpoint_utime = last_setpoint_utime_;
+    msg.publish_utime = wallUtime();
+    lcm_->publish(ch_state_, &msg);
+    status_.countOut(ch_state_, (msg.publish_utime - msg.utime) / 1000.0);
+  }
+
+  void report() {
+    std::vector<double> rtt;
+    int64_t timeouts = 0, errors = 0, buffer_full = 0, malformed = 0;
+    for (auto& h : heads_) {
+      auto& s = h->stats();
+      rtt.insert(rtt.end(), s.round_trip_ms.begin(), s.round_trip_ms.end());
+      timeouts += s.timeouts;
+      errors += s.errors;
+      buffer_full += s.buffer_full;
+      malformed += s.malformed;
+      if (!s.last_error.empty())
+        log_.warn("visca_error", "ptz-driver: camera error: " + s.last_error);
+    }
+    rtt_ms_.insert(rtt_ms_.end(), rtt.begin(), rtt.end());
+    for (auto& h : heads_) h->stats().round_trip_ms.clear();
+    if (rtt_ms_.size() >= 50) {
+      status_.setCounter("visca_round_trip_us_p50", std::llround(percentile(rtt_ms_, 50) * 1000));
+      status_.setCounter("visca_round_trip_us_p99", std::llround(percentile(rtt_ms_, 99) * 1000));
+      rtt_ms_.clear();
+    }
+    status_.setCounter("visca_timeouts", timeouts);
+    status_.setCounter("visca_errors", errors);
+    status_.setCounter("visca_buffer_full", buffer_full);
+    status_.setCounter("visca_malformed", malformed);
+    const bool up = heads_[0]->measured() && heads_[1]->measured() &&
+                    nowS() - std::min(heads_[0]->measuredAtS(), heads_[1]->measuredAtS()) < 1.0;
+    status_.setState(
+        up ? ptzstereo::process_status_t::STATE_OK : ptzstereo::process_status_t::STATE_ERROR,
+        up ? "" : "no position replies from a camera for 1 s");
+  }
+
+  const Params& p_;
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  PtzPlant::Params limits_;
+  std::string ch_setpoint_, ch_state_;
+  std::array<std::unique_ptr<ViscaIpHead>, 2> heads_;
+  std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
+  std::array<std::optional<PtzPose>, 2> target_;
+  std::array<PtzPose, 2> commanded_{};
+  std::array<bool, 2> started_{false, false};
+  double last_setpoint_s_ = 0, last_state_s_ = 0;
+  int64_t last_setpoint_utime_ = 0;
+  bool holding_ = false;
+  std::vector<double> rtt_ms_;
+};
+
+}  // namespace
+}  // namespace ptz::driver
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-driver",
+                "Drives real PTZ heads from PTZ_SETPOINT and publishes their measured "
+                "PTZ_STATE (VISCA over IP), with limits, rate limits, a deadman and stale-"
+                "setpoint dropping.");
+  driver::declare(params);
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    driver::DriverNode node(p, &lcm);
+    return node.run();
+  });
+}

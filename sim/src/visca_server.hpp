@@ -1,0 +1,34 @@
+// ptz-sim's heads as VISCA-over-IP cameras on 127.0.0.1 (left at port, right at port + 1), so
+// the real ptz-driver drives the simulated motors: absolute pan-tilt and zoom commands become
+// setpoints of the PT1 + dead-time plant (the commanded speed is not modelled: the plant's own
+// lag and rate limits are the motion), inquiries are answered from the plant's state.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <string>
+
+#include "ptz/rig.hpp"
+#include "ptz_driver/udp.hpp"
+#include "ptz_driver/visca_camera.hpp"
+
+namespace ptz::sim {
+
+class ViscaServer {
+ public:
+  ViscaServer(const driver::ViscaModel& model, const std::string& host, int first_port);
+
+  // Serves every waiting datagram with the heads at `now`; moves *setpoints where commands
+  // say. Returns whether a setpoint changed; counts what was malformed.
+  bool serve(const std::array<PtzPose, 2>& now, std::array<PtzPose, 2>* setpoints);
+  int fd(Side side) const { return sockets_[static_cast<size_t>(side)]->fd(); }
+  int64_t malformed() const { return malformed_; }
+  int64_t packets() const { return packets_; }
+
+ private:
+  std::array<std::unique_ptr<driver::UdpSocket>, 2> sockets_;
+  std::array<driver::ViscaCameraEmulator, 2> cameras_;
+  int64_t malformed_ = 0, packets_ = 0;
+};
+
+}  // namespace ptz::sim
