@@ -75,7 +75,8 @@ TEST(Replay, TheCommittedRunReplaysBitIdentically) {
 }
 
 TEST(Replay, AChangeInPerceptionIsNoticed) {
-  // A larger morphology kernel moves centroids by fractions of a pixel: not identical.
+  // A larger morphology kernel moves centroids by fractions of a pixel: not identical (exit 1;
+  // unanswered frames would be exit 3).
   const std::string out = std::string(::testing::TempDir()) + "/changed.lcmlog";
   EXPECT_EQ(replay({"--morph-size-px", "5"}, out), 1);
 }

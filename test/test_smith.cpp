@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <random>
 
 #include "control/controller.hpp"
@@ -115,7 +114,6 @@ double figureEightCentringRmsPx(const std::string& mode, double delay_s, double 
     cp.limits.axis[a].gain *= model_scale;
     cp.limits.axis[a].time_constant_s *= model_scale;
   }
-  if (const char* q = std::getenv("PTZ_Q")) cp.kalman.accel_psd_m2_s3 = std::atof(q);
   pc::Controller controller(rig, cp);
   std::mt19937 rng(5);
   std::normal_distribution<double> unit(0.0, 1.0);

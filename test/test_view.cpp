@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <random>
@@ -85,7 +86,9 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
   ::mkdir(shots.c_str(), 0755);
   ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                        PTZ_SOURCE_DIR "/config/detect_default.yaml"});
-  ChildProcess view({PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl, "--screenshot-dir", shots});
+  // A frame waits for its detections (however slow ptz-detect is here) before it is drawn.
+  ChildProcess view({PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl, "--screenshot-dir", shots,
+                     "--max-wait-s", "5"});
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-view"]["up"]; }, 30s));
   // The ball stands still, so any frame drawn shows it where its detections say.
@@ -146,7 +149,8 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
     // it carries the epipolar line).
     int hits = 0;
     for (int dy = -2; dy <= 2; ++dy) {
-      hits += near(shown.at<cv::Vec3b>(y - r + dy, x), ptz::tools::kTargetColour);
+      const int row = std::clamp(y - r + dy, 0, 479);
+      hits += near(shown.at<cv::Vec3b>(row, std::clamp(x, 0, 1279)), ptz::tools::kTargetColour);
     }
     return hits;
   };
@@ -155,8 +159,10 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
   int green = 0;
   const int ex = 640 + static_cast<int>(right.centroid_x_px) +
                  static_cast<int>(std::sqrt(right.area_px2 / M_PI)) + 20;
+  ASSERT_LT(ex, 1280) << "the target is too near the right edge for this check";
   for (int dy = -4; dy <= 4; ++dy) {
-    const cv::Vec3b p = shown.at<cv::Vec3b>(static_cast<int>(right.centroid_y_px) + dy, ex);
+    const int row = std::clamp(static_cast<int>(right.centroid_y_px) + dy, 0, 479);
+    const cv::Vec3b p = shown.at<cv::Vec3b>(row, ex);
     green += near(p, ptz::tools::kEpipolarColour);
   }
   EXPECT_GE(green, 1) << "no epipolar line beside the right image's target";

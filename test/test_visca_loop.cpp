@@ -97,3 +97,50 @@ TEST(ViscaLoop, TheDriverDropsStaleAndNonFiniteSetpoints) {
       << l.counters["ptz-driver"]["dropped_nonfinite"];
   EXPECT_EQ(driver.wait(0ms), -1) << "the driver must keep running";
 }
+
+TEST(ViscaLoop, SetpointsBeyondTheLimitsAreClampedAndTheDeadmanHolds) {
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ptz::test::Listener l;
+  lcm.subscribe("PROCESS_STATUS_.*", &ptz::test::Listener::onStatus, &l);
+  std::vector<std::pair<int64_t, double>> pan;  // (utime, left pan) of every PTZ_STATE
+  lcm.subscribeFunction(
+      "PTZ_STATE",
+      +[](const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::ptz_state_t* m,
+          std::vector<std::pair<int64_t, double>>* out) {
+        out->emplace_back(m->utime, m->left.pan_rad);
+      },
+      &pan);
+  const std::string model = kConfig + "visca/sony_srg300.yaml";
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                    kConfig + "sim_paper.yaml", "--clock", "realtime", "--encoding", "jpeg",
+                    "--duration-s", "20", "--visca-port", "52395", "--visca-model", model,
+                    "--pan-max-rate", "3.0"});
+  ChildProcess driver({PTZ_DRIVER_BIN, "--lcm-url", ptz::test::kTestUrl, "--visca-model", model,
+                       "--left-port", "52395", "--right-port", "52396"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return pan.size() >= 10; }, 20s));
+  // 2 s of setpoints far beyond the pan limit (10 rad; the limit is 170 deg = 2.967 rad).
+  const double limit = 170 * M_PI / 180;
+  const auto until = std::chrono::steady_clock::now() + 2s;
+  while (std::chrono::steady_clock::now() < until) {
+    ptzstereo::ptz_setpoint_t sp{};
+    sp.utime = sp.publish_utime = ptz::wallUtime();
+    sp.left = {10.0, 0.0, 1.0};
+    sp.right = {-10.0, 0.0, 1.0};
+    lcm.publish("PTZ_SETPOINT", &sp);
+    lcm.handleTimeout(33);  // the states meanwhile; a setpoint about every frame
+  }
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-driver"]["deadman_holds"] >= 1; }, 5s));
+  const double at_hold = pan.back().second;
+  ptz::test::handleUntil(
+      lcm, [&, n = pan.size()] { return pan.size() >= n + 50; }, 5s);  // a second of states
+  double highest = 0;
+  for (const auto& [t, p] : pan) highest = std::max(highest, p);
+  std::printf("highest pan %.4f rad (limit %.4f); at the hold %.4f, a second later %.4f\n", highest,
+              limit, at_hold, pan.back().second);
+  EXPECT_GT(highest, 2.0);                        // it went towards the limit...
+  EXPECT_LE(highest, limit + 1e-3);               // ...and not beyond
+  EXPECT_NEAR(pan.back().second, at_hold, 0.05);  // held, not still driving to 10 rad
+  EXPECT_EQ(driver.stop(), 0) << "SIGTERM: the driver stops the heads and exits cleanly";
+}

@@ -85,7 +85,9 @@ class DriverNode {
       }
       status_.maybePublish();
     }
-    for (auto& h : heads_) h->stop(nowS());  // motion stops on exit
+    for (auto& h : heads_) {  // motion stops on exit
+      if (!h->stop(nowS(), 0.3)) log_.warn("stop", "ptz-driver: a camera did not answer the stop");
+    }
     status_.publishNow();
     return 0;
   }
@@ -127,15 +129,21 @@ class DriverNode {
       status_.increment("deadman_holds");
       log_.warn("deadman", "ptz-driver: no fresh setpoint; holding");
       for (size_t i = 0; i < 2; ++i) {
-        if (const auto m = heads_[i]->measured()) target_[i] = *m;
+        if (const auto m = heads_[i]->measured()) {
+          target_[i] = *m;
+        } else {  // where it is is unknown: stop it there
+          target_[i].reset();
+          heads_[i]->stop(now, 0.03);
+        }
       }
     }
     for (size_t i = 0; i < 2; ++i) {
-      if (target_[i]) {
-        const auto measured = heads_[i]->measured();
+      const auto measured = heads_[i]->measured();
+      // Not before the head's position is known: slewing starts from where it is.
+      if (target_[i] && measured) {
         PtzPose& c = commanded_[i];
         if (!started_[i]) {
-          c = measured.value_or(*target_[i]);
+          c = *measured;
           started_[i] = true;
         }
         const double step = p_.getDouble("max_setpoint_rate") * period_s;

@@ -2,7 +2,8 @@
 // to the real ptz-detect (started beforehand, e.g. by scripts/replay) and waits for the
 // OBJECT_POSE that answers it before the next frame, so nothing is dropped and the replay runs
 // as fast as detection. Each replayed pose is compared with the logged one of the same frame:
-// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference.
+// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference,
+// 3 when frames went unanswered (no ptz-detect, or it dropped them).
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
@@ -59,7 +60,8 @@ int main(int argc, char** argv) {
   p.add("log_channel_prefix", "", "prefix of the channel names in the log");
   p.add("out", "", "write the replayed OBJECT_POSE messages to this LCM log");
   p.add("timeout_s", 5.0, "s", "wait this long for each answer (and for ptz-detect to be up)");
-  p.add("check", false, "exit 1 unless every replayed pose is identical to the logged one");
+  p.add("check", false,
+        "exit 1 when a replayed pose differs from the logged one, 3 when unanswered");
   return ptz::runProcess(argc, argv, p, [](const ptz::Params& params, lcm::LCM& lcm) {
     const std::string path = params.getString("log");
     if (path.empty()) throw ptz::ConfigError("--log FILE is required");
@@ -153,6 +155,8 @@ int main(int argc, char** argv) {
         static_cast<long long>(different), worst_m, static_cast<long long>(unanswered),
         static_cast<long long>(not_logged));
     if (frames == 0) throw ptz::ConfigError("no STEREO_FRAME in '" + path + "'");
-    return params.getBool("check") && (different > 0 || unanswered > 0 || identical == 0) ? 1 : 0;
+    if (!params.getBool("check")) return 0;
+    if (different > 0) return 1;                      // perception changed
+    return unanswered > 0 || identical == 0 ? 3 : 0;  // ptz-detect did not answer
   });
 }

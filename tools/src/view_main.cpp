@@ -87,6 +87,9 @@ class ViewNode {
     while (frame_times_us_.front() < now - 1'000'000) frame_times_us_.pop_front();
     if (paused_ && !step_) {
       status_.increment("frames_not_drawn");
+      // Their detections and poses will never be drawn either.
+      detections_by_seq_.erase(detections_by_seq_.begin(), detections_by_seq_.upper_bound(m.seq));
+      poses_by_seq_.erase(poses_by_seq_.begin(), poses_by_seq_.upper_bound(m.seq));
       return;
     }
     ViewInput in;

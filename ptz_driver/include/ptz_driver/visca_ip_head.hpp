@@ -24,8 +24,9 @@ class ViscaIpHead {
   void start(double now_s);
   // Moves to pose (clamped to the model's range); only sends what changed by a unit or more.
   void command(const PtzPose& pose, double now_s);
-  // Stops pan, tilt and zoom where they are.
-  void stop(double now_s);
+  // Stops pan, tilt and zoom where they are. Returns whether the camera acknowledged (or
+  // completed, or refused) both commands within timeout_s (it waits for the replies).
+  bool stop(double now_s, double timeout_s);
   // Asks where the head is, unless an inquiry is already out and not yet timed out.
   void inquire(double now_s, double timeout_s);
   // Reads every waiting reply.
@@ -46,13 +47,18 @@ class ViscaIpHead {
 
  private:
   enum class Request { kPanTiltInquiry, kZoomInquiry, kCommand, kReset };
-  void send(uint16_t type, const Bytes& payload, Request what, double now_s);
+  bool send(uint16_t type, const Bytes& payload, Request what, double now_s);
 
   ViscaModel model_;
   int address_;
   UdpSocket socket_;
   uint32_t sequence_ = 0;
-  std::map<uint32_t, std::pair<Request, double>> outstanding_;  // sequence -> (what, sent at)
+  struct Pending {
+    Request what;
+    double sent_s;
+    bool acked;  // a command the camera took; its completion (or error) may take a while
+  };
+  std::map<uint32_t, Pending> outstanding_;  // by sequence number
   std::optional<int32_t> pan_units_, tilt_units_;
   std::optional<int> zoom_position_;
   double measured_at_s_ = 0;
