@@ -8,6 +8,7 @@
 #include <string>
 
 #include "ptz/config.hpp"
+#include "tools/log_reader.hpp"
 #include "tools/run_metrics.hpp"
 
 namespace {
@@ -18,13 +19,6 @@ struct ChannelStats {
   int64_t first_utime = 0;
   int64_t last_utime = 0;
 };
-
-template <typename T>
-bool decode(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
-  if (msg->decode(ev.data, 0, ev.datalen) >= 0) return true;
-  ++*undecodable;
-  return false;
-}
 
 }  // namespace
 
@@ -81,13 +75,13 @@ int main(int argc, char** argv) {
     const std::string& ch = ev->channel;
     if (ch == prefix + "STEREO_FRAME") {
       ptzstereo::stereo_frame_t f;
-      if (!decode(*ev, &f, &undecodable)) continue;
+      if (!ptz::tools::decodeEvent(*ev, &f, &undecodable)) continue;
       if (last_seq >= 0 && f.seq > last_seq + 1) frame_gaps += f.seq - last_seq - 1;
       last_seq = f.seq;
       metrics.onFrame(f);
     } else if (ch == prefix + "SIM_TRUTH") {
       ptzstereo::sim_truth_t t;
-      if (!decode(*ev, &t, &undecodable)) continue;
+      if (!ptz::tools::decodeEvent(*ev, &t, &undecodable)) continue;
       metrics.onTruth(t);
       if (csv) {
         if (first_truth_utime < 0) first_truth_utime = t.utime;
@@ -98,13 +92,13 @@ int main(int argc, char** argv) {
       }
     } else if (ch == prefix + "OBJECT_POSE") {
       ptzstereo::object_pose_t m;
-      if (decode(*ev, &m, &undecodable)) metrics.onPose(m);
+      if (ptz::tools::decodeEvent(*ev, &m, &undecodable)) metrics.onPose(m);
     } else if (ch == prefix + "PTZ_SETPOINT") {
       ptzstereo::ptz_setpoint_t m;
-      if (decode(*ev, &m, &undecodable)) metrics.onSetpoint(m);
+      if (ptz::tools::decodeEvent(*ev, &m, &undecodable)) metrics.onSetpoint(m);
     } else if (ch.rfind(prefix + "PROCESS_STATUS_", 0) == 0) {
       ptzstereo::process_status_t s;
-      if (!decode(*ev, &s, &undecodable)) continue;
+      if (!ptz::tools::decodeEvent(*ev, &s, &undecodable)) continue;
       last_status[s.process] = s;
       metrics.onStatus(s);
     }

@@ -11,43 +11,15 @@
 namespace ptz::tools {
 namespace {
 
-template <typename T>
-bool decode(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
-  if (msg->decode(ev.data, 0, ev.datalen) >= 0) return true;
-  ++*undecodable;
-  return false;
-}
-
 template <typename Head>
 std::array<double, 6> sixAxes(const Head& l, const Head& r) {
   return {l.pan_rad, l.tilt_rad, l.zoom, r.pan_rad, r.tilt_rad, r.zoom};
-}
-
-// Grows a per-second series to hold bin and returns it.
-template <typename T>
-T& bin(std::vector<T>* series, size_t index) {
-  if (series->size() <= index) series->resize(index + 1, T{});
-  return (*series)[index];
 }
 
 }  // namespace
 
 ReportData collectReport(LogReader& log, const ReportOptions& o) {
   ReportData d;
-  // Rates over bins of a round width, about 50 over the run (a first pass for the duration).
-  {
-    int64_t first = -1, last = 0;
-    LogReader pass(log.path());
-    while (const lcm::LogEvent* ev = pass.next()) {
-      if (first < 0) first = ev->timestamp;
-      last = ev->timestamp;
-    }
-    const double span_s = (last - first) * 1e-6;
-    for (double w : {0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 300.0}) {
-      d.bin_s = w;
-      if (span_s / w <= 60) break;
-    }
-  }
   const std::string& px = o.channel_prefix;
   RunMetrics summary_metrics(o.target_class, o.settle_s);
   RunMetrics series_metrics(o.target_class, 0.0);
@@ -58,6 +30,10 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
   std::vector<ptzstereo::object_pose_t> poses;
   std::vector<ptzstereo::ptz_setpoint_t> setpoints;
   std::vector<int64_t> frame_periods_us;
+  // Log (receive) times, binned once the run's length is known.
+  std::map<std::string, std::vector<double>> arrivals;
+  std::vector<std::pair<double, int64_t>> missing_at;
+  std::map<std::string, std::vector<std::pair<double, int64_t>>> dropped_at;
   int64_t t0 = -1, first_event_us = -1, last_event_us = 0, last_seq = -1, missing = 0;
   const auto setT0 = [&](int64_t utime) {
     if (t0 < 0) t0 = utime;
@@ -65,14 +41,13 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
   while (const lcm::LogEvent* ev = log.next()) {
     if (first_event_us < 0) first_event_us = ev->timestamp;
     last_event_us = ev->timestamp;
-    const size_t bin_index =
-        static_cast<size_t>(std::max<int64_t>(0, ev->timestamp - first_event_us) * 1e-6 / d.bin_s);
-    ++bin(&d.messages_per_bin[ev->channel], bin_index);
+    const double log_t_s = std::max<int64_t>(0, ev->timestamp - first_event_us) * 1e-6;
+    arrivals[ev->channel].push_back(log_t_s);
     ++d.channel_messages[ev->channel];
     const std::string& ch = ev->channel;
     if (ch == px + channels::kStereoFrame) {
       ptzstereo::stereo_frame_t f{};
-      if (!decode(*ev, &f, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &f, &d.undecodable)) continue;
       setT0(f.utime);
       if (last_seq >= 0 && f.seq > last_seq + 1) missing += f.seq - last_seq - 1;
       if (!frame_utime.empty()) frame_periods_us.push_back(f.utime - frame_utime.rbegin()->second);
@@ -82,21 +57,21 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
       image_size[f.seq] = {f.left.width, f.left.height};
       summary_metrics.onFrame(f);
       series_metrics.onFrame(f);
-      bin(&d.frames_missing_cumulative, bin_index) = missing;
+      missing_at.emplace_back(log_t_s, missing);
     } else if (ch == px + channels::kPtzState) {
       ptzstereo::ptz_state_t s{};
-      if (!decode(*ev, &s, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &s, &d.undecodable)) continue;
       setT0(s.utime);
       d.states.push_back({(s.utime - t0) * 1e-6, sixAxes(s.left, s.right)});
     } else if (ch == px + channels::kPtzSetpoint) {
       ptzstereo::ptz_setpoint_t s{};
-      if (!decode(*ev, &s, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &s, &d.undecodable)) continue;
       setT0(s.utime);
       setpoints.push_back(s);
       summary_metrics.onSetpoint(s);
     } else if (ch == px + channels::kSimTruth) {
       ptzstereo::sim_truth_t t{};
-      if (!decode(*ev, &t, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &t, &d.undecodable)) continue;
       setT0(t.utime);
       frame_utime.emplace(t.frame_seq, t.utime);
       summary_metrics.onTruth(t);
@@ -109,20 +84,20 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
       }
     } else if (ch == px + channels::kObjectPose) {
       ptzstereo::object_pose_t p{};
-      if (!decode(*ev, &p, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &p, &d.undecodable)) continue;
       summary_metrics.onPose(p);
       poses.push_back(p);
     } else if (ch == px + channels::kObjectDetections) {
       ptzstereo::object_detections_t m{};
-      if (decode(*ev, &m, &d.undecodable)) detections[m.frame_seq] = m;
+      if (decodeEvent(*ev, &m, &d.undecodable)) detections[m.frame_seq] = m;
     } else if (ch.rfind(px + "PROCESS_STATUS_", 0) == 0) {
       ptzstereo::process_status_t s{};
-      if (!decode(*ev, &s, &d.undecodable)) continue;
+      if (!decodeEvent(*ev, &s, &d.undecodable)) continue;
       summary_metrics.onStatus(s);
       for (const auto& c : s.counters) {
         // What was lost or not processed: dropped_* counters and frames a process skipped.
         if (c.name.rfind("dropped", 0) == 0 || c.name.rfind("frames_skipped", 0) == 0) {
-          bin(&d.dropped_cumulative[s.process + "." + c.name], bin_index) = c.value;
+          dropped_at[s.process + "." + c.name].emplace_back(log_t_s, c.value);
         }
       }
     }
@@ -136,15 +111,29 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
                              "STEREO_FRAME, PTZ_STATE, PTZ_SETPOINT, SIM_TRUTH); it has:" + have);
   }
   d.duration_s = (last_event_us - first_event_us) * 1e-6;
-  // Cumulative series hold their last value through seconds without a message.
+  // Bins of a round width, about 50 over the run.
+  for (double w : {0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 30.0, 60.0, 300.0}) {
+    d.bin_s = w;
+    if (d.duration_s / w <= 60) break;
+  }
   const size_t bins = static_cast<size_t>(d.duration_s / d.bin_s) + 1;
-  auto carry = [&](std::vector<int64_t>* v) {
-    v->resize(bins, v->empty() ? 0 : v->back());
-    for (size_t i = 1; i < v->size(); ++i) (*v)[i] = std::max((*v)[i], (*v)[i - 1]);
+  const auto index = [&](double t_s) {
+    return std::min(bins - 1, static_cast<size_t>(t_s / d.bin_s));
   };
-  carry(&d.frames_missing_cumulative);
-  for (auto& [name, v] : d.dropped_cumulative) carry(&v);
-  for (auto& [name, v] : d.messages_per_bin) v.resize(bins, 0);
+  for (const auto& [name, times] : arrivals) {
+    std::vector<int>& v = d.messages_per_bin[name];
+    v.assign(bins, 0);
+    for (double t : times) ++v[index(t)];
+  }
+  // Cumulative series hold their last value through bins without a message.
+  auto cumulative = [&](const std::vector<std::pair<double, int64_t>>& at) {
+    std::vector<int64_t> v(bins, 0);
+    for (const auto& [t, value] : at) v[index(t)] = std::max(v[index(t)], value);
+    for (size_t i = 1; i < v.size(); ++i) v[i] = std::max(v[i], v[i - 1]);
+    return v;
+  };
+  d.frames_missing_cumulative = cumulative(missing_at);
+  for (const auto& [name, at] : dropped_at) d.dropped_cumulative[name] = cumulative(at);
 
   for (const auto& s : setpoints) {
     d.setpoints.push_back({(s.utime - t0) * 1e-6, sixAxes(s.left, s.right)});

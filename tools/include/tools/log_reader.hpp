@@ -29,7 +29,6 @@ class LogReader {
   const std::vector<Break>& breaks() const { return breaks_; }
   int64_t events() const { return events_; }
   int64_t fileBytes() const { return file_bytes_; }
-  const std::string& path() const { return path_; }
   // One line per break, for messages and reports ("" when the log is whole).
   std::string describeBreaks() const;
 
@@ -44,5 +43,13 @@ class LogReader {
   bool done_ = false;
   std::vector<Break> breaks_;
 };
+
+// Decodes one logged message; counts it in *undecodable when it does not decode.
+template <typename T>
+bool decodeEvent(const lcm::LogEvent& ev, T* msg, int64_t* undecodable) {
+  if (msg->decode(ev.data, 0, ev.datalen) >= 0) return true;
+  ++*undecodable;
+  return false;
+}
 
 }  // namespace ptz::tools
