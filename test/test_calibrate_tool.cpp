@@ -61,8 +61,7 @@ void expectContains(const ToolRun& run, const std::string& text) {
                                                       << run.output;
 }
 
-#define SKIP_WITHOUT_SAMPLE() \
-  if (!ptz::test::exists(sampleDir())) GTEST_SKIP() << "test data absent: " << sampleDir()
+#define SKIP_WITHOUT_SAMPLE() PTZ_REQUIRE_DATA(sampleDir())
 
 TEST(CalibrateTool, WrongBoardSizeSaysNoCornersAndSuggestsCheckingIt) {
   SKIP_WITHOUT_SAMPLE();

@@ -34,7 +34,7 @@ ptz::perception::DetectedViews detectSample() {
 }
 
 TEST(Calibration, OpenCvStereoSampleMeetsTheReferenceNumbers) {
-  if (!ptz::test::exists(sampleDir())) GTEST_SKIP() << "test data absent: " << sampleDir();
+  PTZ_REQUIRE_DATA(sampleDir());
   const BoardSpec board = kSampleBoard;
   const auto detected = detectSample();
   ASSERT_EQ(detected.views.size(), 13u);
@@ -48,7 +48,7 @@ TEST(Calibration, OpenCvStereoSampleMeetsTheReferenceNumbers) {
 }
 
 TEST(Calibration, DropsOutlierViewsWhenAskedAndSaysWhy) {
-  if (!ptz::test::exists(sampleDir())) GTEST_SKIP() << "test data absent: " << sampleDir();
+  PTZ_REQUIRE_DATA(sampleDir());
   const BoardSpec board = kSampleBoard;
   const auto detected = detectSample();
   ptz::perception::StereoOptions options;
@@ -90,7 +90,7 @@ TEST(Calibration, DropsOutlierViewsWhenAskedAndSaysWhy) {
 // OpenCV's calib1.dat: object and image points with the Caltech toolbox's answers.
 TEST(Calibration, MonoMatchesTheBouguetToolboxAnswers) {
   const std::string path = ptz::test::dataDir() + "/opencv_calib_known_answers/calib1.dat";
-  if (!ptz::test::exists(path)) GTEST_SKIP() << "test data absent: " << path;
+  PTZ_REQUIRE_DATA(path);
   std::ifstream in(path);
   int width = 0, height = 0, cols = 0, rows = 0, views = 0, flags = 0;
   in >> width >> height >> cols >> rows >> views >> flags;

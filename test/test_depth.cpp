@@ -173,7 +173,7 @@ double jsonNumber(const std::string& json, const std::string& key) {
 // SGBM: the quality mode with its defaults, over the full width.
 TEST(Middlebury, BmAndSgbmNoWorseThanOpenCvsReferenceOnEverySet) {
   const std::string root = ptz::test::dataDir() + "/middlebury/";
-  if (!ptz::test::exists(root)) GTEST_SKIP() << "no Middlebury data in " << root;
+  PTZ_REQUIRE_DATA(root);
   for (const auto& s : kSets) {
     const std::string dir = root + s.folder + "/";
     const std::string bm = runEval(s, dir,

@@ -173,7 +173,7 @@ TEST(Stereo, TriangulationIsExactForNoiselessPixels) {
 
 TEST(Detector, CountsTheRedAndBlueSmartiesInTheRealPhoto) {
   const std::string path = ptz::test::dataDir() + "/color/smarties.png";
-  if (!ptz::test::exists(path)) GTEST_SKIP() << "test data absent: " << path;
+  PTZ_REQUIRE_DATA(path);
   const cv::Mat img = cv::imread(path, cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty());
   perception::DetectorParams p;
