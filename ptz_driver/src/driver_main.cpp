@@ -46,6 +46,10 @@ class DriverNode {
         lcm_(lcm),
         status_(lcm, p, "ptz-driver"),
         limits_(plantParamsFrom(p)),
+        inquiry_timeout_s_(p.getDouble("inquiry_timeout_s")),
+        deadman_s_(p.getDouble("deadman_s")),
+        max_setpoint_age_s_(p.getDouble("max_setpoint_age_s")),
+        max_setpoint_rate_(p.getDouble("max_setpoint_rate")),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)) {
     if (p.getString("backend") != "visca_ip") {
@@ -97,7 +101,7 @@ class DriverNode {
 
   void onSetpoint(const std::string& ch, const ptzstereo::ptz_setpoint_t& m) {
     const double age_s = nowS() - m.publish_utime * 1e-6;
-    if (age_s > p_.getDouble("max_setpoint_age_s") || age_s < -1.0) {
+    if (age_s > max_setpoint_age_s_ || age_s < -1.0) {
       status_.countDropped(ch, "setpoint_stale");
       return;
     }
@@ -124,7 +128,7 @@ class DriverNode {
   void tick(double period_s) {
     const double now = nowS();
     // Deadman: no fresh setpoint -> hold where the heads are, once.
-    if (target_[0] && !holding_ && now - last_setpoint_s_ > p_.getDouble("deadman_s")) {
+    if (target_[0] && !holding_ && now - last_setpoint_s_ > deadman_s_) {
       holding_ = true;
       status_.increment("deadman_holds");
       log_.warn("deadman", "ptz-driver: no fresh setpoint; holding");
@@ -146,13 +150,13 @@ class DriverNode {
           c = *measured;
           started_[i] = true;
         }
-        const double step = p_.getDouble("max_setpoint_rate") * period_s;
+        const double step = max_setpoint_rate_ * period_s;
         c.pan_rad += std::clamp(target_[i]->pan_rad - c.pan_rad, -step, step);
         c.tilt_rad += std::clamp(target_[i]->tilt_rad - c.tilt_rad, -step, step);
         c.zoom = target_[i]->zoom;
         heads_[i]->command(c, now);
       }
-      heads_[i]->inquire(now, p_.getDouble("inquiry_timeout_s"));
+      heads_[i]->inquire(now, inquiry_timeout_s_);
     }
     publishState();
     report();
@@ -217,6 +221,7 @@ class DriverNode {
   StatusReporter status_;
   RateLimitedLog log_;
   PtzPlant::Params limits_;
+  double inquiry_timeout_s_ = 0, deadman_s_ = 0, max_setpoint_age_s_ = 0, max_setpoint_rate_ = 0;
   std::string ch_setpoint_, ch_state_;
   std::array<std::unique_ptr<ViscaIpHead>, 2> heads_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;

@@ -68,19 +68,6 @@ int main(int argc, char** argv) {
     const std::string in_prefix = params.getString("log_channel_prefix");
     const auto timeout =
         std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
-    // The logged poses first (small), then the frames, streamed.
-    std::map<int64_t, ptzstereo::object_pose_t> logged;
-    {
-      ptz::tools::LogReader reader(path);
-      while (const lcm::LogEvent* ev = reader.next()) {
-        ptzstereo::object_pose_t pose;
-        if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
-            pose.decode(ev->data, 0, ev->datalen) >= 0) {
-          logged[pose.frame_seq] = pose;
-        }
-      }
-      if (!reader.breaks().empty()) std::fputs(reader.describeBreaks().c_str(), stderr);
-    }
     Replies replies;
     lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose), &Replies::onPose, &replies);
     lcm.subscribe(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &Replies::onStatus, &replies);
@@ -101,15 +88,25 @@ int main(int argc, char** argv) {
       out = std::make_unique<lcm::LogFile>(params.getString("out"), "w");
       if (!out->good()) throw ptz::ConfigError("cannot write '" + params.getString("out") + "'");
     }
-    int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0;
+    // One pass: frames are replayed as they come, the logged poses (which follow their
+    // frames in the log) are collected, and the two compared at the end.
+    int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0,
+            undecodable = 0;
     double worst_m = 0;
+    std::map<int64_t, ptzstereo::object_pose_t> logged, replayed_by_seq;
     const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
     ptz::tools::LogReader reader(path);
     while (const lcm::LogEvent* ev = reader.next()) {
       if (ptz::StopFlag::stopRequested()) break;
+      ptzstereo::object_pose_t logged_pose;
+      if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
+          ptz::tools::decodeEvent(*ev, &logged_pose, &undecodable)) {
+        logged[logged_pose.frame_seq] = logged_pose;
+        continue;
+      }
       ptzstereo::stereo_frame_t frame;
       if (ev->channel != in_prefix + ptz::channels::kStereoFrame ||
-          frame.decode(ev->data, 0, ev->datalen) < 0) {
+          !ptz::tools::decodeEvent(*ev, &frame, &undecodable)) {
         continue;
       }
       ++frames;
@@ -132,7 +129,11 @@ int main(int argc, char** argv) {
         e.data = bytes.data();
         out->writeEvent(&e);
       }
-      const auto it = logged.find(frame.seq);
+      replayed_by_seq[frame.seq] = replayed;
+      replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
+    }
+    for (const auto& [seq, replayed] : replayed_by_seq) {
+      const auto it = logged.find(seq);
       if (it == logged.end()) {
         ++not_logged;
       } else if (canonical(it->second) == canonical(replayed)) {
@@ -143,9 +144,12 @@ int main(int argc, char** argv) {
         worst_m = std::max(worst_m, change);
         std::fprintf(stderr,
                      "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
-                     static_cast<long long>(frame.seq), change);
+                     static_cast<long long>(seq), change);
       }
-      replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
+    }
+    if (undecodable) {
+      std::fprintf(stderr, "ptz-replay: %lld undecodable messages in the log\n",
+                   static_cast<long long>(undecodable));
     }
     if (!reader.breaks().empty()) std::fputs(reader.describeBreaks().c_str(), stderr);
     std::printf(

@@ -28,9 +28,10 @@ class ViewNode {
         rig_(std::move(rig)),
         max_wait_us_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)),
         screenshot_dir_(p.getString("screenshot_dir")),
-        screenshot_after_(p.getInt("screenshot_after_frames")) {
+        screenshot_after_(p.getInt("screenshot_after_frames")),
+        ch_frame_(channel(p, channels::kStereoFrame)) {
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
-        *lcm_, channel(p, channels::kStereoFrame), status_,
+        *lcm_, ch_frame_, status_,
         [this](const std::string& ch, const ptzstereo::stereo_frame_t& m) { onFrame(ch, m); }, 1);
     detections_ = std::make_unique<SafeSubscription<ptzstereo::object_detections_t>>(
         *lcm_, channel(p, channels::kObjectDetections), status_,
@@ -76,7 +77,7 @@ class ViewNode {
 
  private:
   struct Pending {
-    ViewInput in;
+    ptzstereo::stereo_frame_t frame;
     int64_t received_us;
   };
 
@@ -92,27 +93,29 @@ class ViewNode {
       poses_by_seq_.erase(poses_by_seq_.begin(), poses_by_seq_.upper_bound(m.seq));
       return;
     }
-    ViewInput in;
-    std::string error;
-    if (!decodeImage(m.left, &in.left, &error) || !decodeImage(m.right, &in.right, &error) ||
-        in.left.type() != CV_8UC3) {
-      status_.countDropped(ch, "bad_image");
-      log_.warn("image", "ptz-view: frame " + std::to_string(m.seq) + " not drawn: " + error);
-      return;
-    }
-    in.left_ptz = {m.left.pan_rad, m.left.tilt_rad, m.left.zoom};
-    in.right_ptz = {m.right.pan_rad, m.right.tilt_rad, m.right.zoom};
-    in.seq = m.seq;
-    if (pending_) status_.increment("frames_not_drawn");  // a newer frame replaces it
-    pending_ = Pending{std::move(in), now};
+    // Kept as it came: only the frame that is drawn is decoded (a newer one replaces it).
+    if (pending_) status_.increment("frames_not_drawn");
+    pending_ = Pending{m, now};
   }
 
   void drawReady() {
     if (!pending_) return;
-    const int64_t seq = pending_->in.seq;
+    const ptzstereo::stereo_frame_t& m = pending_->frame;
+    const int64_t seq = m.seq;
     const bool complete = detections_by_seq_.count(seq) && poses_by_seq_.count(seq);
     if (!complete && wallUtime() - pending_->received_us < max_wait_us_) return;
-    ViewInput& in = pending_->in;
+    ViewInput in;
+    std::string error;
+    if (!decodeImage(m.left, &in.left, &error) || !decodeImage(m.right, &in.right, &error) ||
+        in.left.type() != CV_8UC3) {
+      status_.countDropped(ch_frame_, "bad_image");
+      log_.warn("image", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
+      pending_.reset();
+      return;
+    }
+    in.left_ptz = {m.left.pan_rad, m.left.tilt_rad, m.left.zoom};
+    in.right_ptz = {m.right.pan_rad, m.right.tilt_rad, m.right.zoom};
+    in.seq = seq;
     if (detections_by_seq_.count(seq)) in.detections = detections_by_seq_[seq];
     if (poses_by_seq_.count(seq)) in.pose = poses_by_seq_[seq];
     in.setpoint = setpoint_;
@@ -159,6 +162,7 @@ class ViewNode {
   int64_t max_wait_us_;
   std::string screenshot_dir_;
   int64_t screenshot_after_;
+  std::string ch_frame_;
   std::optional<Pending> pending_;
   std::map<int64_t, ptzstereo::object_detections_t> detections_by_seq_;
   std::map<int64_t, ptzstereo::object_pose_t> poses_by_seq_;
