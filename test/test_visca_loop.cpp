@@ -56,16 +56,16 @@ TEST(ViscaLoop, TracksTheFigureEightThroughViscaOverIp) {
       "VISCA loop: centring %.2f px RMS (max %.2f), 3D error %.3f %% of range, outside %lld; "
       "VISCA round trip p50 %.1f ms p99 %.1f ms; %lld PTZ_STATE; timeouts %lld\n",
       s.centering_rms_px, s.centering_max_px, s.position_error_rms_pct_of_range,
-      static_cast<long long>(s.frames_target_outside_image), d["visca_round_trip_us_p50"] / 1000.0,
-      d["visca_round_trip_us_p99"] / 1000.0, static_cast<long long>(states),
-      static_cast<long long>(d["visca_timeouts"]));
+      static_cast<long long>(s.frames_target_outside_image), d["head_round_trip_us_p50"] / 1000.0,
+      d["head_round_trip_us_p99"] / 1000.0, static_cast<long long>(states),
+      static_cast<long long>(d["head_timeouts"]));
   // The closed-loop issue's goals, VISCA round trip and all.
   EXPECT_LE(s.centering_rms_px, 10.0);
   EXPECT_EQ(s.frames_target_outside_image, 0);
   EXPECT_LE(s.position_error_rms_pct_of_range, 0.5);
-  EXPECT_GT(d["visca_round_trip_us_p50"], 0);
+  EXPECT_GT(d["head_round_trip_us_p50"], 0);
   EXPECT_GT(states, 15 * 10);  // the driver's PTZ_STATE, measured through VISCA
-  EXPECT_EQ(d["visca_errors"], 0);
+  EXPECT_EQ(d["head_errors"], 0);
   EXPECT_GT(l.counters["ptz-sim"]["visca_setpoints_applied"], 100);
 }
 

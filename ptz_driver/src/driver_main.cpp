@@ -12,7 +12,7 @@
 
 #include "ptz/plant.hpp"
 #include "ptz/transport.hpp"
-#include "ptz_driver/visca_ip_head.hpp"
+#include "ptz_driver/head_factory.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 
@@ -22,12 +22,7 @@ namespace {
 void declare(Params& p) {
   addTransportParams(p);
   addPlantParams(p);  // the limits every setpoint is clamped to
-  p.add("backend", "visca_ip", "visca_ip (serial VISCA, Pelco-D and GPIO heads: not yet)");
-  p.add("visca_model", "", "VISCA camera model file (config/visca/*.yaml); required");
-  p.add("left_host", "127.0.0.1", "left camera's IPv4 address");
-  p.add("left_port", 52381, "", "left camera's VISCA-over-IP UDP port");
-  p.add("right_host", "127.0.0.1", "right camera's IPv4 address");
-  p.add("right_port", 52382, "", "right camera's VISCA-over-IP UDP port");
+  declareBackendParams(p);
   p.add("state_rate_hz", 50.0, "Hz", "position inquiries and PTZ_STATE per second");
   p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time");
   p.add("deadman_s", 0.25, "s", "without a fresh setpoint for this long the heads hold");
@@ -52,17 +47,7 @@ class DriverNode {
         max_setpoint_rate_(p.getDouble("max_setpoint_rate")),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)) {
-    if (p.getString("backend") != "visca_ip") {
-      throw ConfigError("parameter 'backend': only visca_ip is implemented so far, got '" +
-                        p.getString("backend") + "'");
-    }
-    if (p.getString("visca_model").empty())
-      throw ConfigError("parameter 'visca_model' is required");
-    const ViscaModel model = ViscaModel::load(p.getString("visca_model"));
-    heads_[0] =
-        std::make_unique<ViscaIpHead>(model, p.getString("left_host"), p.getInt("left_port"));
-    heads_[1] =
-        std::make_unique<ViscaIpHead>(model, p.getString("right_host"), p.getInt("right_port"));
+    heads_ = makeHeads(p);
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, ch_setpoint_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },
@@ -75,6 +60,7 @@ class DriverNode {
     status_.publishNow();
     double next_tick = nowS();
     while (!StopFlag::stopRequested()) {
+      // A head without a descriptor (fd -1) is skipped by poll.
       pollfd fds[3] = {{lcm_->getFileno(), POLLIN, 0},
                        {heads_[0]->fd(), POLLIN, 0},
                        {heads_[1]->fd(), POLLIN, 0}};
@@ -195,25 +181,32 @@ class DriverNode {
       errors += s.errors;
       buffer_full += s.buffer_full;
       malformed += s.malformed;
-      if (!s.last_error.empty())
-        log_.warn("visca_error", "ptz-driver: camera error: " + s.last_error);
+      if (!s.last_error.empty()) log_.warn("head_error", "ptz-driver: head error: " + s.last_error);
     }
     rtt_ms_.insert(rtt_ms_.end(), rtt.begin(), rtt.end());
     for (auto& h : heads_) h->stats().round_trip_ms.clear();
     if (rtt_ms_.size() >= 50) {
-      status_.setCounter("visca_round_trip_us_p50", std::llround(percentile(rtt_ms_, 50) * 1000));
-      status_.setCounter("visca_round_trip_us_p99", std::llround(percentile(rtt_ms_, 99) * 1000));
+      status_.setCounter("head_round_trip_us_p50", std::llround(percentile(rtt_ms_, 50) * 1000));
+      status_.setCounter("head_round_trip_us_p99", std::llround(percentile(rtt_ms_, 99) * 1000));
       rtt_ms_.clear();
     }
-    status_.setCounter("visca_timeouts", timeouts);
-    status_.setCounter("visca_errors", errors);
-    status_.setCounter("visca_buffer_full", buffer_full);
-    status_.setCounter("visca_malformed", malformed);
+    status_.setCounter("head_timeouts", timeouts);
+    status_.setCounter("head_errors", errors);
+    status_.setCounter("head_buffer_full", buffer_full);
+    status_.setCounter("head_malformed", malformed);
     const bool up = heads_[0]->measured() && heads_[1]->measured() &&
                     nowS() - std::min(heads_[0]->measuredAtS(), heads_[1]->measuredAtS()) < 1.0;
-    status_.setState(
-        up ? ptzstereo::process_status_t::STATE_OK : ptzstereo::process_status_t::STATE_ERROR,
-        up ? "" : "no position replies from a camera for 1 s");
+    const bool estimated = !heads_[0]->measuresPosition() || !heads_[1]->measuresPosition();
+    status_.setCounter("position_estimated", estimated ? 1 : 0);
+    if (!up) {
+      status_.setState(ptzstereo::process_status_t::STATE_ERROR,
+                       "no position replies from a head for 1 s");
+    } else if (estimated) {
+      status_.setState(ptzstereo::process_status_t::STATE_WARN,
+                       "a head cannot report its position: PTZ_STATE is estimated");
+    } else {
+      status_.setState(ptzstereo::process_status_t::STATE_OK, "");
+    }
   }
 
   const Params& p_;
@@ -223,7 +216,7 @@ class DriverNode {
   PtzPlant::Params limits_;
   double inquiry_timeout_s_ = 0, deadman_s_ = 0, max_setpoint_age_s_ = 0, max_setpoint_rate_ = 0;
   std::string ch_setpoint_, ch_state_;
-  std::array<std::unique_ptr<ViscaIpHead>, 2> heads_;
+  std::array<std::unique_ptr<PtzHead>, 2> heads_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
   std::array<std::optional<PtzPose>, 2> target_;
   std::array<PtzPose, 2> commanded_{};
@@ -241,7 +234,8 @@ int main(int argc, char** argv) {
   using namespace ptz;
   Params params("ptz-driver",
                 "Drives real PTZ heads from PTZ_SETPOINT and publishes their measured "
-                "PTZ_STATE (VISCA over IP), with limits, rate limits, a deadman and stale-"
+                "PTZ_STATE (VISCA over IP or serial, Pelco-D, GPIO DC motors), with limits, rate "
+                "limits, a deadman and stale-"
                 "setpoint dropping.");
   driver::declare(params);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {

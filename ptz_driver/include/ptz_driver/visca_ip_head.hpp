@@ -9,41 +9,36 @@
 #include <string>
 #include <vector>
 
-#include "ptz/rig.hpp"
+#include "ptz_driver/head.hpp"
 #include "ptz_driver/udp.hpp"
 #include "ptz_driver/visca_camera.hpp"
 
 namespace ptz::driver {
 
-class ViscaIpHead {
+class ViscaIpHead : public PtzHead {
  public:
   // Connects to host:port; throws std::runtime_error naming it when the address is bad.
   ViscaIpHead(ViscaModel model, const std::string& host, int port, int address = 1);
 
   // Resets the camera's sequence number (Sony's RESET control command).
-  void start(double now_s);
+  void start(double now_s) override;
   // Moves to pose (clamped to the model's range); only sends what changed by a unit or more.
-  void command(const PtzPose& pose, double now_s);
+  void command(const PtzPose& pose, double now_s) override;
   // Stops pan, tilt and zoom where they are. Returns whether the camera acknowledged (or
   // completed, or refused) both commands within timeout_s (it waits for the replies).
-  bool stop(double now_s, double timeout_s);
+  bool stop(double now_s, double timeout_s) override;
   // Asks where the head is, unless an inquiry is already out and not yet timed out.
-  void inquire(double now_s, double timeout_s);
+  void inquire(double now_s, double timeout_s) override;
   // Reads every waiting reply.
-  void receive(double now_s);
+  void receive(double now_s) override;
 
   // The last measured pose and the time it was measured (mid round trip); nullopt before.
-  std::optional<PtzPose> measured() const;
-  double measuredAtS() const { return measured_at_s_; }
-  int fd() const { return socket_.fd(); }
+  std::optional<PtzPose> measured() const override;
+  double measuredAtS() const override { return measured_at_s_; }
+  int fd() const override { return socket_.fd(); }
   const ViscaModel& model() const { return model_; }
 
-  struct Stats {
-    int64_t sent = 0, replies = 0, errors = 0, timeouts = 0, buffer_full = 0, malformed = 0;
-    std::vector<double> round_trip_ms;  // of inquiries; cleared by whoever reads it
-    std::string last_error;
-  };
-  Stats& stats() { return stats_; }
+  HeadStats& stats() override { return stats_; }
 
  private:
   enum class Request { kPanTiltInquiry, kZoomInquiry, kCommand, kReset };
@@ -66,7 +61,7 @@ class ViscaIpHead {
   std::optional<int32_t> sent_pan_, sent_tilt_;
   std::optional<int> sent_zoom_;
   bool buffer_full_ = false;
-  Stats stats_;
+  HeadStats stats_;
 };
 
 }  // namespace ptz::driver

@@ -1,0 +1,17 @@
+// The heads ptz-driver drives, chosen by the `backend` parameter: each backend's parameters
+// are declared here, and the two heads (left, right) are built from them.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "ptz/config.hpp"
+#include "ptz_driver/head.hpp"
+
+namespace ptz::driver {
+
+void declareBackendParams(Params& p);
+// Throws ConfigError naming the parameter (or file and field) that is wrong.
+std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p);
+
+}  // namespace ptz::driver
