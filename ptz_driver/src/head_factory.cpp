@@ -1,16 +1,18 @@
 #include "ptz_driver/head_factory.hpp"
 
+#include "ptz_driver/gpio_factory.hpp"
 #include "ptz_driver/visca_ip_head.hpp"
 
 namespace ptz::driver {
 
 void declareBackendParams(Params& p) {
-  p.add("backend", "visca_ip", "visca_ip (serial VISCA, Pelco-D and GPIO heads: not yet)");
+  p.add("backend", "visca_ip", "visca_ip or gpio (serial VISCA and Pelco-D heads: not yet)");
   p.add("visca_model", "", "VISCA camera model file (config/visca/*.yaml); required for VISCA");
   p.add("left_host", "127.0.0.1", "left camera's IPv4 address");
   p.add("left_port", 52381, "", "left camera's VISCA-over-IP UDP port");
   p.add("right_host", "127.0.0.1", "right camera's IPv4 address");
   p.add("right_port", 52382, "", "right camera's VISCA-over-IP UDP port");
+  declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
 }
 
 std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p) {
@@ -26,7 +28,8 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p) {
         std::make_unique<ViscaIpHead>(model, p.getString("right_host"), p.getInt("right_port"));
     return heads;
   }
-  throw ConfigError("parameter 'backend': unknown backend '" + backend + "' (visca_ip)");
+  if (backend == "gpio") return makeGpioHeads(p);
+  throw ConfigError("parameter 'backend': unknown backend '" + backend + "' (visca_ip, gpio)");
 }
 
 }  // namespace ptz::driver

@@ -1,0 +1,76 @@
+// A pan-tilt head of two GPIO DC-motor axes (gpio_axis.hpp). Zoom is not motorised on such
+// heads: the head reports the fixed zoom it was configured with. In the real backend a control
+// thread steps both axes on the monotonic clock, waking at every PWM edge and control tick;
+// without that thread the owner calls step() with its own times (tests, deterministic).
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "ptz_driver/gpio_axis.hpp"
+#include "ptz_driver/gpio_lines.hpp"
+#include "ptz_driver/head.hpp"
+
+namespace ptz::driver {
+
+struct GpioHeadConfig {
+  std::string name = "left";
+  AxisConfig pan, tilt;
+  double zoom = 1;  // reported as measured: the head has no zoom motor
+};
+
+class GpioHead : public PtzHead {
+ public:
+  // Requests the lines of both axes (ConfigError naming the parameter of a line that cannot be
+  // had). threaded: a control thread steps the axes in real time (gpioClockS()).
+  GpioHead(GpioHeadConfig config, std::unique_ptr<GpioLines> lines, bool threaded);
+  ~GpioHead() override;  // the thread ends and the motors stop
+  GpioHead(const GpioHead&) = delete;
+  GpioHead& operator=(const GpioHead&) = delete;
+
+  // Homes both axes (in the background: measured() has a value once both found their switch).
+  void start(double now_s) override;
+  void command(const PtzPose& pose, double now_s) override;
+  // Enable and direction lines low at once, and the axes stay there until the next command.
+  bool stop(double now_s, double timeout_s) override;
+  void inquire(double, double) override {}  // the encoders are always read
+  void receive(double) override {}
+
+  std::optional<PtzPose> measured() const override;
+  // The time of the step that read the encoders (on the wall clock when threaded).
+  double measuredAtS() const override;
+  int fd() const override { return -1; }  // the driver polls on its own clock
+  // errors: axes in fault and failed line reads/writes; malformed: illegal encoder transitions.
+  HeadStats& stats() override;
+
+  // One step at now_s: line events, both axes' control and PWM. Returns when the next is due.
+  double step(double now_s);
+  GpioAxis::State state(int axis) const;
+  double positionRad(int axis) const;  // raw until homed
+  // How late (< 0: early) each step of the control thread ran against when it was due: the
+  // jitter of the PWM edges. Since the last call.
+  std::vector<double> takeWakeLatenessS();
+
+ private:
+  double nowS(double given_s) const;
+  void run();
+
+  GpioHeadConfig config_;
+  std::unique_ptr<GpioLines> lines_;  // before the axes, which use it
+  std::array<std::unique_ptr<GpioAxis>, 2> axes_;
+  mutable std::mutex mutex_;
+  std::vector<LineEvent> events_;
+  double measured_at_s_ = 0;
+  int64_t foreign_events_ = 0;
+  std::vector<double> lateness_s_;
+  HeadStats stats_;
+  bool threaded_;
+  std::atomic<bool> quit_{false};
+  std::thread thread_;
+};
+
+}  // namespace ptz::driver

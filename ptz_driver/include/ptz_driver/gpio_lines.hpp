@@ -1,0 +1,47 @@
+// GPIO lines as the DC-motor heads use them: outputs (direction, PWM enable), inputs with edge
+// events and timestamps (encoder A/B, limit switches). Two providers: libgpiod 1.6 on a real
+// chip (openGpiodChip) and a simulated head for tests (gpio_fake.hpp).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace ptz::driver {
+
+struct LineEvent {
+  int line = -1;
+  bool rising = false;  // the level after the edge
+  double time_s = 0;    // when the edge happened, on gpioClockS()
+};
+
+// The clock of line events and of the heads' control threads: CLOCK_MONOTONIC in seconds (the
+// wall clock may jump, and a PWM period must not stretch with it).
+double gpioClockS();
+
+enum class Bias { kAsIs, kPullUp, kDisabled };
+
+class GpioLines {
+ public:
+  virtual ~GpioLines() = default;
+
+  // `name` is the parameter that chose the line, so that errors name it. Throws ConfigError
+  // naming the chip, the line and `name` when the line cannot be had.
+  virtual void requestOutput(int line, const std::string& name) = 0;  // driven low at first
+  virtual void requestEvents(int line, Bias bias, const std::string& name) = 0;
+
+  virtual void set(int line, bool high) = 0;
+  virtual bool get(int line) = 0;
+  // Appends the edges seen on event lines since the last call, oldest first.
+  virtual void readEvents(std::vector<LineEvent>* events) = 0;
+  // Failed reads and writes so far (the control loop keeps running; the head reports them).
+  virtual int64_t ioErrors() const { return 0; }
+};
+
+// Opens a chip by name ("gpiochip0"), number ("0"), path ("/dev/gpiochip0") or label; throws
+// ConfigError naming the chip when there is no such GPIO chip. `consumer` labels the lines the
+// kernel hands out (gpioinfo shows it).
+std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer);
+
+}  // namespace ptz::driver

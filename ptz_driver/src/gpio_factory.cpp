@@ -1,0 +1,161 @@
+#include "ptz_driver/gpio_factory.hpp"
+
+#include <cmath>
+#include <map>
+
+#include "ptz/plant.hpp"
+#include "ptz_driver/gpio_fake.hpp"
+
+namespace ptz::driver {
+namespace {
+
+// Raspberry Pi 4, BCM numbers on gpiochip0 (README): dir, dir2, enable, A, B, min, max.
+const std::map<std::string, std::array<int, 7>> kPiLines = {
+    {"left_pan_", {5, -1, 12, 17, 27, 2, 3}},
+    {"left_tilt_", {6, -1, 13, 22, 23, 4, 7}},
+    {"right_pan_", {20, -1, 18, 24, 25, 8, 9}},
+    {"right_tilt_", {21, -1, 19, 10, 11, 26, 16}},
+};
+const char* const kLineNames[7] = {"dir_line",       "dir2_line",      "enable_line",
+                                   "encoder_a_line", "encoder_b_line", "limit_min_line",
+                                   "limit_max_line"};
+
+double checked(const Params& p, const std::string& name, double lo, double hi, bool lo_open) {
+  const double v = p.getDouble(name);
+  if (!std::isfinite(v) || v < lo || (lo_open && v == lo) || v > hi) {
+    throw ConfigError("parameter '" + name + "' is " + std::to_string(v) + ": it must be " +
+                      (lo_open ? "> " : ">= ") + std::to_string(lo) +
+                      " and <= " + std::to_string(hi));
+  }
+  return v;
+}
+double positive(const Params& p, const std::string& name) {
+  return checked(p, name, 0, 1e9, true);
+}
+
+}  // namespace
+
+void declareGpioParams(Params& p) {
+  p.add("gpio_chip", "gpiochip0",
+        "backend gpio: GPIO chip (name, number, /dev path or label; sim: simulated axes)");
+  p.add("pwm_hz", 1000.0, "Hz", "backend gpio: software PWM frequency of the enable lines");
+  p.add("control_hz", 500.0, "Hz", "backend gpio: position controller rate");
+  p.add("max_duty", 0.8, "", "backend gpio: largest PWM duty cycle (0..1)");
+  p.add("min_duty", 0.0, "", "backend gpio: duty the motors need to start turning");
+  p.add("homing_timeout_s", 30.0, "s", "backend gpio: homing fails after this long");
+  p.add("homing_max_lag_rad", 0.2, "rad",
+        "backend gpio: homing fails when an axis lags its ramp by more (motor or encoder wrong)");
+  p.add("gpio_zoom", 1.0, "ratio", "backend gpio: the zoom the heads report (no zoom motor)");
+  const double switch_rad[2][2] = {{-3.05, 3.05}, {-0.6, 1.65}};
+  const double homing_rad_s[2] = {0.3, 0.2};
+  for (int i = 0; i < 2; ++i) {
+    const std::string a = i == 0 ? "pan" : "tilt";
+    p.add(a + "_counts_per_rad", 1000.0, "1/rad",
+          "backend gpio: " + a + " encoder counts (x4) per radian, up toward max");
+    p.add(a + "_kp", 4.0, "1/rad", "backend gpio: " + a + " duty per radian of error");
+    p.add(a + "_kd", 0.15, "s/rad", "backend gpio: " + a + " duty per rad/s of speed (damping)");
+    p.add(a + "_deadband_rad", 0.002, "rad", "backend gpio: " + a + " error that leaves it off");
+    p.add(a + "_min_switch_rad", switch_rad[i][0], "rad",
+          "backend gpio: " + a + " position where the min switch closes (homing reference)");
+    p.add(a + "_max_switch_rad", switch_rad[i][1], "rad",
+          "backend gpio: " + a + " position where the max switch closes");
+    p.add(a + "_homing_speed_rad_s", homing_rad_s[i], "rad/s",
+          "backend gpio: " + a + " speed toward the min switch and back to 0");
+  }
+  for (const auto& [prefix, lines] : kPiLines) {
+    for (int k = 0; k < 7; ++k) {
+      p.add(prefix + kLineNames[k], lines[static_cast<size_t>(k)], "",
+            "backend gpio: line offset" + std::string(k == 1 ? " (-1: none)" : ""));
+    }
+  }
+}
+
+GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
+  const PtzPlant::Params plant = plantParamsFrom(p);
+  GpioHeadConfig head;
+  head.name = side;
+  head.zoom = positive(p, "gpio_zoom");
+  for (int i = 0; i < 2; ++i) {
+    const std::string a = i == 0 ? "pan" : "tilt";
+    AxisConfig& c = i == 0 ? head.pan : head.tilt;
+    c.name = a;
+    c.param_prefix = side + "_" + a + "_";
+    int* lines[7] = {&c.lines.dir,       &c.lines.dir2,      &c.lines.enable,   &c.lines.encoder_a,
+                     &c.lines.encoder_b, &c.lines.limit_min, &c.lines.limit_max};
+    for (int k = 0; k < 7; ++k) {
+      const std::string name = c.param_prefix + kLineNames[k];
+      *lines[k] = p.getInt(name);
+      if (*lines[k] < (k == 1 ? -1 : 0))
+        throw ConfigError("parameter '" + name + "' must be a line offset (>= 0)");
+    }
+    c.counts_per_rad = positive(p, a + "_counts_per_rad");
+    c.kp_duty_per_rad = positive(p, a + "_kp");
+    c.kd_duty_s_per_rad = checked(p, a + "_kd", 0, 1e9, false);
+    c.deadband_rad = checked(p, a + "_deadband_rad", 0, 1, false);
+    c.homing_speed_rad_s = positive(p, a + "_homing_speed_rad_s");
+    c.soft_min_rad = plant.axis[i].min_position;
+    c.soft_max_rad = plant.axis[i].max_position;
+    c.min_switch_rad = p.getDouble(a + "_min_switch_rad");
+    c.max_switch_rad = p.getDouble(a + "_max_switch_rad");
+    if (!(c.min_switch_rad < c.soft_min_rad) || !(c.max_switch_rad > c.soft_max_rad)) {
+      throw ConfigError("parameters '" + a + "_min_switch_rad' and '" + a +
+                        "_max_switch_rad' must lie outside the soft limits '" + a + "_min' (" +
+                        std::to_string(c.soft_min_rad) + ") and '" + a + "_max' (" +
+                        std::to_string(c.soft_max_rad) + ")");
+    }
+    c.pwm_hz = checked(p, "pwm_hz", 0, 20000, true);
+    c.control_hz = checked(p, "control_hz", 0, 20000, true);
+    c.max_duty = checked(p, "max_duty", 0, 1, true);
+    c.min_duty = checked(p, "min_duty", 0, c.max_duty, false);
+    c.homing_timeout_s = positive(p, "homing_timeout_s");
+    c.homing_max_lag_rad = positive(p, "homing_max_lag_rad");
+  }
+  return head;
+}
+
+std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
+  std::vector<FakeAxisSpec> axes;
+  for (const AxisConfig* c : {&head.pan, &head.tilt}) {
+    FakeAxisSpec s;
+    s.lines = c->lines;
+    s.counts_per_rad = c->counts_per_rad;
+    s.min_switch_rad = c->min_switch_rad;
+    s.max_switch_rad = c->max_switch_rad;
+    s.min_stop_rad = c->min_switch_rad - 0.05;
+    s.max_stop_rad = c->max_switch_rad + 0.05;
+    s.start_rad = c->min_switch_rad + 0.3;
+    axes.push_back(s);
+  }
+  auto chip = std::make_unique<FakeGpio>(axes);
+  chip->useClock(gpioClockS);
+  return chip;
+}
+
+std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p) {
+  std::array<GpioHeadConfig, 2> configs = {gpioHeadConfig(p, "left"), gpioHeadConfig(p, "right")};
+  // One line, one use: a clear error here instead of "busy" from the kernel.
+  std::map<int, std::string> used;
+  for (const auto& side : {"left_", "right_"}) {
+    for (const auto& a : {"pan_", "tilt_"}) {
+      for (const char* k : kLineNames) {
+        const std::string name = std::string(side) + a + k;
+        const int line = p.getInt(name);
+        if (line < 0) continue;
+        const auto [it, fresh] = used.emplace(line, name);
+        if (!fresh) {
+          throw ConfigError("parameters '" + it->second + "' and '" + name + "' both use line " +
+                            std::to_string(line));
+        }
+      }
+    }
+  }
+  const std::string chip = p.getString("gpio_chip");
+  std::array<std::unique_ptr<PtzHead>, 2> heads;
+  for (size_t i = 0; i < 2; ++i) {
+    auto lines = chip == "sim" ? simulatedChip(configs[i]) : openGpiodChip(chip, "ptz-driver");
+    heads[i] = std::make_unique<GpioHead>(configs[i], std::move(lines), true);
+  }
+  return heads;
+}
+
+}  // namespace ptz::driver

@@ -1,0 +1,139 @@
+#include "ptz_driver/gpio_head.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+
+namespace ptz::driver {
+namespace {
+
+double wallS() {
+  using namespace std::chrono;
+  return duration_cast<nanoseconds>(system_clock::now().time_since_epoch()).count() * 1e-9;
+}
+
+void sleepUntil(double clock_s) {
+  timespec t{};
+  t.tv_sec = static_cast<time_t>(std::floor(clock_s));
+  t.tv_nsec = static_cast<long>((clock_s - std::floor(clock_s)) * 1e9);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
+  }
+}
+
+constexpr size_t kMaxLatenessSamples = 100000;
+
+}  // namespace
+
+GpioHead::GpioHead(GpioHeadConfig config, std::unique_ptr<GpioLines> lines, bool threaded)
+    : config_(std::move(config)), lines_(std::move(lines)), threaded_(threaded) {
+  axes_[0] = std::make_unique<GpioAxis>(config_.pan, *lines_);
+  axes_[1] = std::make_unique<GpioAxis>(config_.tilt, *lines_);
+  if (threaded_) thread_ = std::thread([this] { run(); });
+}
+
+GpioHead::~GpioHead() {
+  quit_ = true;
+  if (thread_.joinable()) thread_.join();
+  for (auto& a : axes_) a->stop();
+}
+
+double GpioHead::nowS(double given_s) const {
+  return threaded_ ? gpioClockS() : given_s;
+}
+
+void GpioHead::start(double now_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& a : axes_) a->startHoming(nowS(now_s));
+}
+
+void GpioHead::command(const PtzPose& pose, double) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  axes_[0]->setTarget(pose.pan_rad);
+  axes_[1]->setTarget(pose.tilt_rad);
+}
+
+bool GpioHead::stop(double, double) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& a : axes_) a->stop();
+  return true;  // the lines are written: nothing to confirm
+}
+
+std::optional<PtzPose> GpioHead::measured() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!axes_[0]->homed() || !axes_[1]->homed()) return std::nullopt;
+  return PtzPose{axes_[0]->positionRad(), axes_[1]->positionRad(), config_.zoom};
+}
+
+double GpioHead::measuredAtS() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return measured_at_s_;
+}
+
+HeadStats& GpioHead::stats() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stats_.malformed = axes_[0]->illegalTransitions() + axes_[1]->illegalTransitions();
+  const int64_t io_errors = lines_->ioErrors();
+  stats_.errors = io_errors;
+  stats_.last_error.clear();
+  for (const auto& a : axes_) {
+    if (a->state() == GpioAxis::State::kFault) ++stats_.errors;
+    if (!a->error().empty()) stats_.last_error = config_.name + " " + a->error();
+  }
+  if (stats_.last_error.empty() && io_errors > 0)
+    stats_.last_error =
+        config_.name + ": " + std::to_string(io_errors) + " GPIO reads/writes failed";
+  return stats_;
+}
+
+double GpioHead::step(double now_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  events_.clear();
+  lines_->readEvents(&events_);
+  for (const auto& e : events_) {
+    if (!axes_[0]->handle(e) && !axes_[1]->handle(e)) ++foreign_events_;
+  }
+  const double next_s = std::min(axes_[0]->step(now_s), axes_[1]->step(now_s));
+  // The driver stamps PTZ_STATE on the wall clock.
+  measured_at_s_ = threaded_ ? now_s + (wallS() - gpioClockS()) : now_s;
+  return next_s;
+}
+
+GpioAxis::State GpioHead::state(int axis) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return axes_.at(static_cast<size_t>(axis))->state();
+}
+
+double GpioHead::positionRad(int axis) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto& a = axes_.at(static_cast<size_t>(axis));
+  return a->homed() ? a->positionRad() : a->counts() / a->config().counts_per_rad;
+}
+
+std::vector<double> GpioHead::takeWakeLatenessS() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<double> out;
+  out.swap(lateness_s_);
+  return out;
+}
+
+// Sleeps until each step is due, minus the usual lateness of a wake-up (learnt as it goes), so
+// that PWM edges land on time on average; a step woken early runs for the time it was due.
+void GpioHead::run() {
+  const double max_lead_s = 0.25 / std::max(config_.pan.pwm_hz, config_.tilt.pwm_hz);
+  double due_s = gpioClockS(), lead_s = 0;
+  while (!quit_) {
+    const double now_s = gpioClockS();
+    lead_s = std::clamp(lead_s + 0.02 * (now_s - due_s), 0.0, max_lead_s);
+    const double next_s = step(std::max(now_s, due_s));
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (lateness_s_.size() < kMaxLatenessSamples) lateness_s_.push_back(now_s - due_s);
+    }
+    due_s = next_s;
+    sleepUntil(due_s - lead_s);
+  }
+}
+
+}  // namespace ptz::driver
