@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace ptz::driver {
 namespace {
@@ -109,9 +110,11 @@ void GpioAxis::control(double now_s) {
   }
   const bool homing = state_ == State::kBackoff || state_ == State::kSeek;
   if (homing && now_s - homing_start_s_ > config_.homing_timeout_s) {
-    return fault("homing timed out after " + std::to_string(config_.homing_timeout_s) +
-                 " s: the min limit switch (line " + std::to_string(config_.lines.limit_min) +
-                 ") never closed");
+    char why[160];
+    std::snprintf(why, sizeof why,
+                  "homing timed out after %g s: the min limit switch (line %d) never closed",
+                  config_.homing_timeout_s, config_.lines.limit_min);
+    return fault(why);
   }
   if (homing && std::abs(target_rad_ - rawRad()) > config_.homing_max_lag_rad) {
     return fault(

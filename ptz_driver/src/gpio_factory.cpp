@@ -1,6 +1,7 @@
 #include "ptz_driver/gpio_factory.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "ptz/plant.hpp"
@@ -10,22 +11,30 @@ namespace ptz::driver {
 namespace {
 
 // Raspberry Pi 4, BCM numbers on gpiochip0 (README): dir, dir2, enable, A, B, min, max.
-const std::map<std::string, std::array<int, 7>> kPiLines = {
-    {"left_pan_", {5, -1, 12, 17, 27, 2, 3}},
-    {"left_tilt_", {6, -1, 13, 22, 23, 4, 7}},
-    {"right_pan_", {20, -1, 18, 24, 25, 8, 9}},
-    {"right_tilt_", {21, -1, 19, 10, 11, 26, 16}},
+struct PiAxis {
+  const char* head;
+  const char* axis;
+  std::array<int, 7> lines;
 };
+const PiAxis kPiLines[4] = {{"left", "pan", {5, -1, 12, 17, 27, 2, 3}},
+                            {"left", "tilt", {6, -1, 13, 22, 23, 4, 7}},
+                            {"right", "pan", {20, -1, 18, 24, 25, 8, 9}},
+                            {"right", "tilt", {21, -1, 19, 10, 11, 26, 16}}};
 const char* const kLineNames[7] = {"dir_line",       "dir2_line",      "enable_line",
                                    "encoder_a_line", "encoder_b_line", "limit_min_line",
                                    "limit_max_line"};
 
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
 double checked(const Params& p, const std::string& name, double lo, double hi, bool lo_open) {
   const double v = p.getDouble(name);
   if (!std::isfinite(v) || v < lo || (lo_open && v == lo) || v > hi) {
-    throw ConfigError("parameter '" + name + "' is " + std::to_string(v) + ": it must be " +
-                      (lo_open ? "> " : ">= ") + std::to_string(lo) +
-                      " and <= " + std::to_string(hi));
+    throw ConfigError("parameter '" + name + "' is " + num(v) + ": it must be " +
+                      (lo_open ? "> " : ">= ") + num(lo) + " and <= " + num(hi));
   }
   return v;
 }
@@ -62,10 +71,18 @@ void declareGpioParams(Params& p) {
     p.add(a + "_homing_speed_rad_s", homing_rad_s[i], "rad/s",
           "backend gpio: " + a + " speed toward the min switch and back to 0");
   }
-  for (const auto& [prefix, lines] : kPiLines) {
-    for (int k = 0; k < 7; ++k) {
-      p.add(prefix + kLineNames[k], lines[static_cast<size_t>(k)], "",
-            "backend gpio: line offset" + std::string(k == 1 ? " (-1: none)" : ""));
+  const char* const what[7] = {"direction line (high: toward max)",
+                               "second direction line, not dir, for IN1/IN2 bridges (-1: none)",
+                               "enable line (software PWM)",
+                               "encoder A line",
+                               "encoder B line",
+                               "min limit switch line (closed: low)",
+                               "max limit switch line (closed: low)"};
+  for (const auto& a : kPiLines) {
+    const std::string prefix = std::string(a.head) + "_" + a.axis + "_";
+    for (size_t k = 0; k < 7; ++k) {
+      p.add(prefix + kLineNames[k], a.lines[k], "",
+            "backend gpio: " + std::string(a.head) + " " + a.axis + " " + what[k]);
     }
   }
 }
@@ -100,8 +117,8 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
     if (!(c.min_switch_rad < c.soft_min_rad) || !(c.max_switch_rad > c.soft_max_rad)) {
       throw ConfigError("parameters '" + a + "_min_switch_rad' and '" + a +
                         "_max_switch_rad' must lie outside the soft limits '" + a + "_min' (" +
-                        std::to_string(c.soft_min_rad) + ") and '" + a + "_max' (" +
-                        std::to_string(c.soft_max_rad) + ")");
+                        num(c.soft_min_rad) + ") and '" + a + "_max' (" + num(c.soft_max_rad) +
+                        ")");
     }
     c.pwm_hz = checked(p, "pwm_hz", 0, 20000, true);
     c.control_hz = checked(p, "control_hz", 0, 20000, true);
