@@ -89,6 +89,23 @@ TEST(GpioAxis, HomingTimeoutIsAnErrorNamingTheAxis) {
   EXPECT_NEAR(rig.chip->positionRad(0), at_rad, 0.3 * 0.05 + kCount);  // coasts, no drive
 }
 
+TEST(GpioAxis, AStopDuringHomingInterruptsItAndSaysSo) {
+  const auto c = GpioRig::config();
+  GpioRig rig(c, fakeAxis(c.pan, -0.7), fakeAxis(c.tilt, -0.9));
+  rig.head->start(0);
+  rig.run(0.5);
+  rig.head->stop(rig.t_s, 0.1);
+  EXPECT_FALSE(rig.chip->level(kPanEnable));
+  rig.run(1);
+  EXPECT_EQ(rig.head->state(0), GpioAxis::State::kIdle);
+  EXPECT_FALSE(rig.head->measured());
+  rig.head->command(PtzPose{0.5, 0.5, 1}, rig.t_s);  // not homed: not moved
+  rig.run(0.5);
+  EXPECT_FALSE(rig.chip->level(kPanEnable));
+  EXPECT_EQ(rig.head->stats().errors, 2);  // both axes
+  EXPECT_NE(rig.head->stats().last_error.find("homing interrupted"), std::string::npos);
+}
+
 TEST(GpioAxis, AnEncoderCountingTheWrongWayFailsHoming) {
   auto c = GpioRig::config();
   auto pan = fakeAxis(c.pan, -0.5);

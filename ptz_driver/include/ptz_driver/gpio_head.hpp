@@ -44,7 +44,8 @@ class GpioHead : public PtzHead {
   // The time of the step that read the encoders (on the wall clock when threaded).
   double measuredAtS() const override;
   int fd() const override { return -1; }  // the driver polls on its own clock
-  // errors: axes in fault and failed line reads/writes; malformed: illegal encoder transitions.
+  // errors: axes whose homing failed or was interrupted, and failed line reads/writes;
+  // malformed: illegal encoder transitions.
   HeadStats& stats() override;
 
   // One step at now_s: line events, both axes' control and PWM. Returns when the next is due.
