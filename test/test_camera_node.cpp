@@ -89,6 +89,28 @@ TEST(CameraNode, EachImageCarriesThePtzOfItsOwnCaptureTime) {
   EXPECT_EQ(h, Health::kWarn);
 }
 
+TEST(CameraNode, ARecordingWaitsForItsPartnerInsteadOfOverflowingAndALiveCameraCannot) {
+  CameraConfig c = config(0);
+  c.pairer.buffer_frames = 10;
+  Rig files(c);
+  for (int k = 0; k < 40; ++k) files.left->push(kStart + k * 40'000, k);
+  for (int step = 0; step < 5; ++step) files.camera.step(kStart + step * 10'000);
+  EXPECT_EQ(files.camera.counters().at("unmatched_left"), 0);
+  EXPECT_EQ(files.camera.counters().at("frames_left"), 10);  // the rest waits in the source
+  for (int k = 0; k < 40; ++k) files.right->push(kStart + k * 40'000 + 1'000, k);
+  size_t pairs = 0;
+  for (int step = 0; step < 10; ++step) pairs += files.camera.step(kStart + 100'000).size();
+  EXPECT_EQ(pairs, 40u);
+  EXPECT_EQ(files.camera.counters().at("unmatched_left"), 0);
+
+  c.source[0] = parseSource("0", "left_source");  // a V4L2 camera
+  Rig live(c);
+  for (int k = 0; k < 40; ++k) live.left->push(kStart + k * 40'000, k);
+  live.camera.step(kStart);
+  EXPECT_EQ(live.camera.counters().at("frames_left"), 40);
+  EXPECT_EQ(live.camera.counters().at("unmatched_left"), 30);
+}
+
 TEST(CameraNode, PairsBeyondTheMaximumRateAreSkippedAndCounted) {
   Rig rig(config(30.0));
   for (int k = 0; k < 20; ++k) {  // 60 Hz
@@ -166,4 +188,17 @@ TEST(CameraNode, ParametersAreCheckedWithTheParameterNamed) {
             "parameters 'width' and 'height' must both be 1..16384, or both 0");
   EXPECT_EQ(error({{"fourcc", "MJPEG"}}),
             "parameter 'fourcc' must be four characters (e.g. MJPG), got 'MJPEG'");
+}
+
+TEST(CameraNode, TheExampleConfigsLoad) {
+  for (const char* name : {"camera_files.yaml", "camera_rtsp.yaml"}) {
+    ptz::Params p("ptz-camera", "test");
+    declareCameraParams(p);
+    p.add("encoding", "raw", "declared by ptz-camera's main (transport)");
+    p.add("jpeg_quality", 90, "", "declared by ptz-camera's main (transport)");
+    p.parseConfigFile(std::string(PTZ_SOURCE_DIR) + "/config/" + name);
+    const CameraConfig c = cameraConfigFrom(p);
+    EXPECT_EQ(c.pairer.tolerance_us, 15'000) << name;
+    EXPECT_EQ(c.capture[0].width, 640) << name;
+  }
 }

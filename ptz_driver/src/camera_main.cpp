@@ -14,6 +14,8 @@
 namespace ptz::driver {
 namespace {
 
+constexpr int kStateQueue = 1000;  // PTZ_STATE messages waiting to be handled
+
 PtzPose pose(const ptzstereo::ptz_head_state_t& h) {
   return {h.pan_rad, h.tilt_rad, h.zoom};
 }
@@ -46,9 +48,11 @@ class CameraNode {
       factories[s] = makeCaptureFactory(config.source[s], config.capture[s], clock, notifier_);
     }
     // Subscribed before any source opens: states published from now on stamp the first frames.
+    // Every state counts for the interpolation (unlike frames): a queue for bursts, not of one.
     states_ = std::make_unique<SafeSubscription<ptzstereo::ptz_state_t>>(
         *lcm_, ch_state_, status_,
-        [this](const std::string& ch, const ptzstereo::ptz_state_t& m) { onState(ch, m); });
+        [this](const std::string& ch, const ptzstereo::ptz_state_t& m) { onState(ch, m); },
+        kStateQueue);
     camera_ = std::make_unique<StereoCamera>(config, std::move(factories));
   }
 
@@ -111,7 +115,9 @@ class CameraNode {
     std::string message;
     const Health h = camera_->health(now, &message);
     status_.setState(statusState(h), message);
-    if (h == Health::kError) log_.warn("error", "ptz-camera: " + message);
+    // Sources log each of their events; a rig that does not pair has no event: rate-limited.
+    const std::string no_pair = camera_->noPairMessage(now);
+    if (!no_pair.empty()) log_.warn("no_pair", "ptz-camera: " + no_pair);
     status_.maybePublish();
   }
 

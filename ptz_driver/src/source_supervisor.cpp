@@ -20,7 +20,7 @@ SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, Supe
       params_(params),
       delay_s_(params.retry_initial_s) {}
 
-void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames) {
+void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, size_t max_frames) {
   if (state_ == State::kEnded) return;
   if (state_ == State::kWaiting) {
     if (now_s < retry_at_s_) return;
@@ -28,10 +28,13 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames) {
     state_ = State::kConnecting;
     attempt_start_s_ = now_s;
     had_frame_ = false;
-    if (reconnects_ > 0) events_.push_back(name_ + ": reconnecting");
   }
   CapturedFrame frame;
-  for (;;) {
+  for (size_t taken = 0;; ++taken) {
+    if (taken == max_frames) {
+      if (state_ == State::kStreaming) last_frame_s_ = now_s;  // we paused it, it did not stop
+      break;
+    }
     const FrameSource::Poll r = source_->poll(&frame);
     if (r == FrameSource::Poll::kNothing) break;
     if (r == FrameSource::Poll::kFrame) {

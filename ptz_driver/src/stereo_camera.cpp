@@ -50,14 +50,15 @@ void declareCameraParams(Params& p) {
   p.add("fourcc", "", "pixel format asked of V4L2 cameras, e.g. MJPG (empty: the driver's)");
   p.add("pair_tolerance_s", 0.015, "s",
         "pair frames whose capture times differ by at most this (keep below half a frame period)");
-  p.add("pair_buffer_frames", 30, "", "frames per side waiting for a partner (beyond: unmatched)");
+  p.add("pair_buffer_frames", 30, "",
+        "frames a side waiting for a partner (live: the oldest beyond unmatched; files wait)");
   p.add("no_pair_warn_s", 2.0, "s", "status ERROR when both sides deliver but none pair this long");
   p.add("ptz_history_s", 2.0, "s", "PTZ_STATE kept for stamping frames");
   p.add("max_ptz_extrapolation_s", 0.1, "s",
         "frames further outside the PTZ_STATE history get the nearest state, counted ptz_stale");
   p.add("max_rate_hz", 30.0, "Hz", "publish at most this many pairs a second (0: every pair)");
   p.add("source_timeout_s", 2.0, "s", "a streaming source without a frame this long is reopened");
-  p.add("open_timeout_s", 10.0, "s", "a connection without a first frame this long is reopened");
+  p.add("open_timeout_s", 5.0, "s", "a connection without a first frame this long is reopened");
   p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure");
   p.add("retry_max_s", 8.0, "s", "longest reconnection delay");
 }
@@ -137,7 +138,14 @@ std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
   std::vector<CapturedFrame> frames;
   for (size_t s = 0; s < 2; ++s) {
     frames.clear();
-    sources_[s].step(static_cast<double>(now_utime) * 1e-6, &frames);
+    // Recordings wait while their side has its pairing buffer full (the other side is behind,
+    // e.g. a slow decoder); a live camera cannot wait: its oldest frames are unmatched instead.
+    size_t room = static_cast<size_t>(-1);
+    if (!config_.source[s].live()) {
+      const size_t waiting = pairer_.waiting(static_cast<Side>(s));
+      room = waiting < config_.pairer.buffer_frames ? config_.pairer.buffer_frames - waiting : 0;
+    }
+    sources_[s].step(static_cast<double>(now_utime) * 1e-6, &frames, room);
     for (auto& f : frames) {
       if (f.resized) ++resized_[s];
       pairer_.add(static_cast<Side>(s), std::move(f), now_utime);

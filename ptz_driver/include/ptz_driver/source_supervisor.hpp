@@ -15,7 +15,7 @@ namespace ptz::driver {
 
 struct SupervisorParams {
   double source_timeout_s = 2.0;  // streaming: no frame for this long -> reconnect
-  double open_timeout_s = 10.0;   // connecting: no first frame for this long -> reconnect
+  double open_timeout_s = 5.0;    // connecting: no first frame for this long -> reconnect
   double retry_initial_s = 0.5;   // first back-off; doubles after every failed attempt
   double retry_max_s = 8.0;       // back-off ceiling
 };
@@ -27,9 +27,11 @@ class SourceSupervisor {
   // name: how messages call the source, e.g. "right source rtsp://cam/stream".
   SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params);
 
-  // At now_s: connects when a retry is due, appends the frames the source has to *frames, gives
+  // At now_s: connects when a retry is due, appends the frames the source has to *frames (at
+  // most max_frames: the caller has no room for more, which does not count as silence), gives
   // the connection up when it failed or stayed quiet too long (retry after the back-off).
-  void step(double now_s, std::vector<CapturedFrame>* frames);
+  void step(double now_s, std::vector<CapturedFrame>* frames,
+            size_t max_frames = static_cast<size_t>(-1));
 
   State state() const { return state_; }
   // Connections given up (each is followed by a retry).

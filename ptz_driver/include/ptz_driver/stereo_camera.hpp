@@ -53,6 +53,8 @@ class StereoCamera {
   bool finished() const;
 
   Health health(int64_t now_utime, std::string* message) const;
+  // The pairer's complaint (part of health's message): "" or "no stereo pair in 2.0 s: ...".
+  std::string noPairMessage(int64_t now_utime) const { return pairer_.noPairMessage(now_utime); }
   std::map<std::string, int64_t> counters() const;
   // Log lines: sources given up, reconnected, ended.
   std::vector<std::string> takeEvents();
