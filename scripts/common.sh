@@ -9,7 +9,9 @@ PTZ_PACKAGES=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev pcl-tools
   libgpiod-dev libgtest-dev
-  gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-rtsp libgstrtspserver-1.0-dev
+  # GStreamer for ptz-camera's RTSP cameras (plugins-bad: openh264dec, their H.264 decoder)
+  gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad gstreamer1.0-rtsp
+  libgstrtspserver-1.0-dev
   gstreamer1.0-tools
   default-jdk-headless libjchart2d-java
   iproute2 xvfb x11-apps imagemagick xdotool gnuplot-nox

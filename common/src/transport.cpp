@@ -93,6 +93,44 @@ ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_q
   return msg;
 }
 
+ptzstereo::image_t encodeImage(const cv::Mat& image, const PtzPose& pose, int8_t encoding,
+                               int jpeg_quality) {
+  ptzstereo::image_t msg = encodeImage(image, encoding, jpeg_quality);
+  msg.pan_rad = pose.pan_rad;
+  msg.tilt_rad = pose.tilt_rad;
+  msg.zoom = pose.zoom;
+  return msg;
+}
+
+ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::Mat& left,
+                                          const PtzPose& left_pose, const cv::Mat& right,
+                                          const PtzPose& right_pose, int8_t encoding,
+                                          int jpeg_quality) {
+  ptzstereo::stereo_frame_t msg{};
+  msg.utime = utime;
+  msg.seq = seq;
+  msg.left = encodeImage(left, left_pose, encoding, jpeg_quality);
+  msg.right = encodeImage(right, right_pose, encoding, jpeg_quality);
+  return msg;
+}
+
+void addImageEncodingParams(Params& params) {
+  params.add("encoding", "raw", "image encoding in STEREO_FRAME: raw or jpeg");
+  params.add("jpeg_quality", 90, "", "JPEG quality 1..100");
+}
+
+int8_t imageEncodingFrom(const Params& params) {
+  const std::string enc = params.getString("encoding");
+  if (enc != "raw" && enc != "jpeg") {
+    throw ConfigError("parameter 'encoding' must be raw or jpeg, got '" + enc + "'");
+  }
+  const int quality = params.getInt("jpeg_quality");
+  if (quality < 1 || quality > 100) {
+    throw ConfigError("parameter 'jpeg_quality' must be 1..100, got " + std::to_string(quality));
+  }
+  return enc == "jpeg" ? ptzstereo::image_t::ENCODING_JPEG : ptzstereo::image_t::ENCODING_RAW;
+}
+
 bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error) {
   int channels = 0;
   switch (msg.pixel_format) {

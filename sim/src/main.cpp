@@ -29,8 +29,7 @@ void declare(Params& p) {
   p.add("frame_rate_hz", 30.0, "Hz", "stereo frame rate (sim time)");
   p.add("frames", 0, "", "stop after this many frames (0: no limit)");
   p.add("duration_s", 0.0, "s", "stop after this much sim time (0: no limit)");
-  p.add("encoding", "raw", "image encoding in STEREO_FRAME: raw or jpeg");
-  p.add("jpeg_quality", 90, "", "JPEG quality 1..100");
+  addImageEncodingParams(p);
   p.add("noise_sigma", 2.0, "grey levels", "standard deviation of the pixel noise");
   p.add("seed", 1, "", "seed of the pixel noise");
   p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)");
@@ -56,8 +55,7 @@ class SimNode {
         lockstep_(p.getString("clock") == "lockstep"),
         frame_period_s_(1.0 / p.getDouble("frame_rate_hz")),
         state_period_s_(1.0 / p.getDouble("state_rate_hz")),
-        encoding_(p.getString("encoding") == "jpeg" ? ptzstereo::image_t::ENCODING_JPEG
-                                                    : ptzstereo::image_t::ENCODING_RAW),
+        encoding_(imageEncodingFrom(p)),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_truth_(channel(p, channels::kSimTruth)),
@@ -291,13 +289,10 @@ int main(int argc, char** argv) {
   sim::declare(params);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
     const std::string clock = p.getString("clock");
-    const std::string enc = p.getString("encoding");
     if (clock != "realtime" && clock != "lockstep") {
       throw ConfigError("parameter 'clock' must be realtime or lockstep, got '" + clock + "'");
     }
-    if (enc != "raw" && enc != "jpeg") {
-      throw ConfigError("parameter 'encoding' must be raw or jpeg, got '" + enc + "'");
-    }
+    imageEncodingFrom(p);  // throws for a bad encoding or quality
     const double fps = p.getDouble("frame_rate_hz"), state_hz = p.getDouble("state_rate_hz");
     if (!(fps >= 0.1 && fps <= 1000) || !(state_hz >= 1 && state_hz <= 10000)) {
       throw ConfigError(

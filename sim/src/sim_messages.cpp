@@ -35,14 +35,6 @@ ptzstereo::camera_model_t cameraModel(const CameraView& v) {
   return m;
 }
 
-ptzstereo::image_t image(const cv::Mat& bgr, const PtzPose& pose, int8_t encoding, int quality) {
-  ptzstereo::image_t img = encodeImage(bgr, encoding, quality);
-  img.pan_rad = pose.pan_rad;
-  img.tilt_rad = pose.tilt_rad;
-  img.zoom = pose.zoom;
-  return img;
-}
-
 }  // namespace
 
 ptzstereo::ptz_state_t makeStateMessage(const PtzPlant& plant, int64_t utime) {
@@ -55,12 +47,8 @@ ptzstereo::ptz_state_t makeStateMessage(const PtzPlant& plant, int64_t utime) {
 
 ptzstereo::stereo_frame_t makeFrameMessage(const SimFrame& frame, int64_t utime, int8_t encoding,
                                            int jpeg_quality) {
-  ptzstereo::stereo_frame_t msg{};
-  msg.utime = utime;
-  msg.seq = frame.index;
-  msg.left = image(frame.left, frame.left_pose, encoding, jpeg_quality);
-  msg.right = image(frame.right, frame.right_pose, encoding, jpeg_quality);
-  return msg;
+  return makeStereoFrame(utime, frame.index, frame.left, frame.left_pose, frame.right,
+                         frame.right_pose, encoding, jpeg_quality);
 }
 
 ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& frame,

@@ -13,8 +13,10 @@
 #include <vector>
 
 #include "ptz/config.hpp"
+#include "ptz/rig.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
 
 namespace ptz {
 
@@ -48,6 +50,19 @@ int64_t wallUtime();
 
 // Encodes an 8-bit BGR or gray image. jpeg_quality is used for ENCODING_JPEG only.
 ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality);
+// The same, with the camera's pan/tilt/zoom at capture.
+ptzstereo::image_t encodeImage(const cv::Mat& image, const PtzPose& pose, int8_t encoding,
+                               int jpeg_quality);
+// A STEREO_FRAME as every frame source publishes it (ptz-sim, ptz-camera); publish_utime is
+// left to the publisher.
+ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::Mat& left,
+                                          const PtzPose& left_pose, const cv::Mat& right,
+                                          const PtzPose& right_pose, int8_t encoding,
+                                          int jpeg_quality);
+// Declares `encoding` (raw or jpeg) and `jpeg_quality` of the images in STEREO_FRAME.
+void addImageEncodingParams(Params& params);
+// image_t::ENCODING_RAW or ENCODING_JPEG; throws ConfigError for another name or quality.
+int8_t imageEncodingFrom(const Params& params);
 // Decodes to BGR8 (or GRAY8). Returns false and says why for anything inconsistent.
 bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
 

@@ -1,0 +1,74 @@
+// ptz-camera without LCM: two supervised frame sources, stereo pairs by capture time, each image
+// stamped with its camera's pan/tilt/zoom at its capture time, a publish-rate limit; its
+// parameters, counters and health. ptz-camera's main only moves messages.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "ptz/config.hpp"
+#include "ptz_driver/capture_source.hpp"
+#include "ptz_driver/ptz_history.hpp"
+#include "ptz_driver/source_supervisor.hpp"
+#include "ptz_driver/stereo_pairer.hpp"
+
+namespace ptz::driver {
+
+struct CameraConfig {
+  std::array<SourceSpec, 2> source;  // left, right
+  std::array<CaptureOptions, 2> capture;
+  SupervisorParams supervisor;
+  PairerParams pairer;
+  double ptz_history_s = 2.0, max_ptz_extrapolation_s = 0.1;
+  double max_rate_hz = 30.0;  // 0: every pair
+};
+
+// Everything but the transport and the image encoding (lcm_url, encoding, jpeg_quality, ...).
+void declareCameraParams(Params& p);
+// Reads and checks them, and the timestamps files; ConfigError names the parameter or the file.
+CameraConfig cameraConfigFrom(const Params& p);
+
+struct StampedPair {
+  CapturedFrame left, right;
+  PtzPose left_pose, right_pose;  // each at its own image's capture time
+  bool ptz_stale = false;
+  int64_t first_arrival_utime = 0;  // when the earlier frame of the pair arrived (wall clock)
+};
+
+enum class Health { kOk, kWarn, kError };
+
+class StereoCamera {
+ public:
+  // factories: left, right (capture sources in ptz-camera, fakes in tests).
+  StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories);
+
+  // False (ignored) when not after the newest state.
+  bool onPtzState(int64_t utime, const PtzPose& left, const PtzPose& right);
+  // Takes the sources' frames at now_utime (wall clock); returns the pairs to publish.
+  std::vector<StampedPair> step(int64_t now_utime);
+  // Both sources ended (files without loop) and every frame is decided.
+  bool finished() const;
+
+  Health health(int64_t now_utime, std::string* message) const;
+  // The pairer's complaint (part of health's message): "" or "no stereo pair in 2.0 s: ...".
+  std::string noPairMessage(int64_t now_utime) const { return pairer_.noPairMessage(now_utime); }
+  std::map<std::string, int64_t> counters() const;
+  // Log lines: sources given up, reconnected, ended.
+  std::vector<std::string> takeEvents();
+
+ private:
+  CameraConfig config_;
+  std::array<SourceSupervisor, 2> sources_;
+  StereoPairer pairer_;
+  PtzHistory history_;
+  std::array<bool, 2> ended_{false, false};
+  std::array<int64_t, 2> resized_{0, 0};
+  int64_t skipped_rate_ = 0, ptz_stale_ = 0;
+  bool last_stale_ = false, published_any_ = false;
+  int64_t next_allowed_utime_ = 0;
+};
+
+}  // namespace ptz::driver

@@ -1,0 +1,153 @@
+// ptz-camera: two real cameras (or recordings) -> STEREO_FRAME, exactly as ptz-sim publishes it,
+// each image stamped with its camera's pan/tilt/zoom at capture from PTZ_STATE. Everything but
+// the messages is the library's (stereo_camera.hpp); this loop waits on LCM and on the readers.
+#include <poll.h>
+
+#include <cstdio>
+#include <cstdlib>
+
+#include "ptz/transport.hpp"
+#include "ptz_driver/stereo_camera.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+
+namespace ptz::driver {
+namespace {
+
+constexpr int kStateQueue = 1000;  // PTZ_STATE messages waiting to be handled
+
+PtzPose pose(const ptzstereo::ptz_head_state_t& h) {
+  return {h.pan_rad, h.tilt_rad, h.zoom};
+}
+
+int8_t statusState(Health h) {
+  switch (h) {
+    case Health::kOk:
+      return ptzstereo::process_status_t::STATE_OK;
+    case Health::kWarn:
+      return ptzstereo::process_status_t::STATE_WARN;
+    case Health::kError:
+      break;
+  }
+  return ptzstereo::process_status_t::STATE_ERROR;
+}
+
+class CameraNode {
+ public:
+  CameraNode(const Params& p, lcm::LCM* lcm)
+      : lcm_(lcm),
+        status_(lcm, p, "ptz-camera"),
+        encoding_(imageEncodingFrom(p)),
+        jpeg_quality_(p.getInt("jpeg_quality")),
+        ch_frame_(channel(p, channels::kStereoFrame)),
+        ch_state_(channel(p, channels::kPtzState)) {
+    const CameraConfig config = cameraConfigFrom(p);
+    auto clock = std::make_shared<PlaybackClock>();
+    std::array<SourceFactory, 2> factories;
+    for (size_t s = 0; s < 2; ++s) {
+      factories[s] = makeCaptureFactory(config.source[s], config.capture[s], clock, notifier_);
+    }
+    // Subscribed before any source opens: states published from now on stamp the first frames.
+    // Every state counts for the interpolation (unlike frames): a queue for bursts, not of one.
+    states_ = std::make_unique<SafeSubscription<ptzstereo::ptz_state_t>>(
+        *lcm_, ch_state_, status_,
+        [this](const std::string& ch, const ptzstereo::ptz_state_t& m) { onState(ch, m); },
+        kStateQueue);
+    camera_ = std::make_unique<StereoCamera>(config, std::move(factories));
+  }
+
+  int run() {
+    status_.publishNow();  // up and subscribed
+    while (!StopFlag::stopRequested()) {
+      pollfd fds[2] = {{lcm_->getFileno(), POLLIN, 0}, {notifier_->fd(), POLLIN, 0}};
+      ::poll(fds, 2, 50);  // at least 20 Hz for timeouts and the status
+      // States first, so that the frames that woke us find the states published before them.
+      if (fds[0].revents & POLLIN) {
+        while (lcm_->handleTimeout(0) > 0) {
+        }
+      }
+      notifier_->drain();
+      const int64_t now = wallUtime();
+      for (auto& pair : camera_->step(now)) publish(pair);
+      for (const auto& e : camera_->takeEvents())
+        std::fprintf(stderr, "ptz-camera: %s\n", e.c_str());
+      report(now);
+      if (camera_->finished()) break;  // both files played to their end
+    }
+    report(wallUtime());
+    status_.publishNow();
+    if (abandonedReaders() > 0) {
+      // A reader still blocked in a driver must not run into the static destructors.
+      std::fprintf(stderr, "ptz-camera: %d reader(s) still blocked in a driver at exit\n",
+                   abandonedReaders());
+      std::fflush(nullptr);
+      std::_Exit(0);
+    }
+    return 0;
+  }
+
+ private:
+  void onState(const std::string& ch, const ptzstereo::ptz_state_t& m) {
+    if (!camera_->onPtzState(m.utime, pose(m.left), pose(m.right))) {
+      status_.countDropped(ch, "not_newer");
+      return;
+    }
+    status_.countIn(ch, (wallUtime() - m.utime) / 1000.0);
+  }
+
+  void publish(const StampedPair& p) {
+    ptzstereo::stereo_frame_t msg =
+        makeStereoFrame(p.left.capture_utime, seq_++, p.left.image, p.left_pose, p.right.image,
+                        p.right_pose, encoding_, jpeg_quality_);
+    msg.publish_utime = wallUtime();
+    lcm_->publish(ch_frame_, &msg);
+    status_.countOut(ch_frame_, (msg.publish_utime - msg.utime) / 1000.0);
+    wait_ms_.push_back((msg.publish_utime - p.first_arrival_utime) / 1000.0);
+  }
+
+  void report(int64_t now) {
+    for (const auto& [name, value] : camera_->counters()) status_.setCounter(name, value);
+    if (wait_ms_.size() >= 30) {  // from the first frame of a pair arriving to its publication
+      status_.setCounter("pair_wait_us_p50", std::llround(percentile(wait_ms_, 50) * 1000));
+      status_.setCounter("pair_wait_us_p99", std::llround(percentile(wait_ms_, 99) * 1000));
+      wait_ms_.clear();
+    }
+    std::string message;
+    const Health h = camera_->health(now, &message);
+    status_.setState(statusState(h), message);
+    // Sources log each of their events; a rig that does not pair has no event: rate-limited.
+    const std::string no_pair = camera_->noPairMessage(now);
+    if (!no_pair.empty()) log_.warn("no_pair", "ptz-camera: " + no_pair);
+    status_.maybePublish();
+  }
+
+  lcm::LCM* lcm_;
+  StatusReporter status_;
+  RateLimitedLog log_;
+  int8_t encoding_;
+  int jpeg_quality_;
+  std::string ch_frame_, ch_state_;
+  std::shared_ptr<FrameNotifier> notifier_ = std::make_shared<FrameNotifier>();
+  std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;
+  std::unique_ptr<StereoCamera> camera_;
+  int64_t seq_ = 0;
+  std::vector<double> wait_ms_;
+};
+
+}  // namespace
+}  // namespace ptz::driver
+
+int main(int argc, char** argv) {
+  using namespace ptz;
+  Params params("ptz-camera",
+                "Two cameras (V4L2, RTSP, GStreamer) or recordings (video files, image folders) "
+                "-> STEREO_FRAME, paired by capture time and stamped with each camera's "
+                "pan/tilt/zoom from PTZ_STATE; reconnects lost cameras with back-off.");
+  addTransportParams(params);
+  driver::declareCameraParams(params);
+  addImageEncodingParams(params);
+  return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
+    driver::CameraNode node(p, &lcm);
+    return node.run();
+  });
+}

@@ -1,0 +1,101 @@
+#include "ptz_driver/source_supervisor.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace ptz::driver {
+namespace {
+
+std::string seconds(double s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f s", s);
+  return buf;
+}
+
+}  // namespace
+
+SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params)
+    : name_(std::move(name)),
+      factory_(std::move(factory)),
+      params_(params),
+      delay_s_(params.retry_initial_s) {}
+
+void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, size_t max_frames) {
+  if (state_ == State::kEnded) return;
+  if (state_ == State::kWaiting) {
+    if (now_s < retry_at_s_) return;
+    source_ = factory_();
+    state_ = State::kConnecting;
+    attempt_start_s_ = now_s;
+    had_frame_ = false;
+  }
+  CapturedFrame frame;
+  for (size_t taken = 0;; ++taken) {
+    if (taken == max_frames) {
+      if (state_ == State::kStreaming) last_frame_s_ = now_s;  // we paused it, it did not stop
+      break;
+    }
+    const FrameSource::Poll r = source_->poll(&frame);
+    if (r == FrameSource::Poll::kNothing) break;
+    if (r == FrameSource::Poll::kFrame) {
+      frames->push_back(std::move(frame));
+      frame = CapturedFrame{};
+      ++frames_;
+      last_frame_s_ = now_s;
+      if (!had_frame_ && reconnects_ > 0) events_.push_back(name_ + ": frames again");
+      had_frame_ = true;
+      state_ = State::kStreaming;
+      delay_s_ = params_.retry_initial_s;  // it worked: the next failure starts over
+      continue;
+    }
+    if (r == FrameSource::Poll::kEnded) {
+      overflowed_done_ += source_->overflowed();
+      const std::string why = source_->error();
+      source_.reset();
+      state_ = State::kEnded;
+      events_.push_back(name_ + ": " + (why.empty() ? "end of file" : why) + " after " +
+                        std::to_string(frames_) + " frames");
+      return;
+    }
+    giveUp(now_s, (had_frame_ ? "read failed: " : "cannot open: ") + source_->error());
+    return;
+  }
+  if (state_ == State::kStreaming && now_s - last_frame_s_ > params_.source_timeout_s) {
+    giveUp(now_s, "no frame for " + seconds(now_s - last_frame_s_));
+  } else if (state_ == State::kConnecting && now_s - attempt_start_s_ > params_.open_timeout_s) {
+    giveUp(now_s, "no frame " + seconds(now_s - attempt_start_s_) + " after opening");
+  }
+}
+
+void SourceSupervisor::giveUp(double now_s, const std::string& why) {
+  overflowed_done_ += source_->overflowed();
+  source_.reset();  // a real source leaves a reader blocked in its driver to finish by itself
+  ++reconnects_;
+  why_ = why;
+  retry_at_s_ = now_s + delay_s_;
+  events_.push_back(name_ + ": " + why + ", reconnecting in " + seconds(delay_s_));
+  delay_s_ = std::min(2 * delay_s_, params_.retry_max_s);
+  state_ = State::kWaiting;
+}
+
+int64_t SourceSupervisor::overflowed() const {
+  return overflowed_done_ + (source_ ? source_->overflowed() : 0);
+}
+
+std::string SourceSupervisor::problem(double now_s) const {
+  if (state_ == State::kWaiting && reconnects_ > 0) {
+    return name_ + ": " + why_ + ", reconnecting in " + seconds(std::max(0.0, retry_at_s_ - now_s));
+  }
+  if (state_ == State::kConnecting && reconnects_ > 0) {
+    return name_ + ": " + why_ + ", reconnecting (attempt " + std::to_string(reconnects_ + 1) + ")";
+  }
+  return "";
+}
+
+std::vector<std::string> SourceSupervisor::takeEvents() {
+  std::vector<std::string> out;
+  out.swap(events_);
+  return out;
+}
+
+}  // namespace ptz::driver

@@ -1,0 +1,243 @@
+#include "ptz_driver/stereo_camera.hpp"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ptz::driver {
+namespace {
+
+const std::array<const char*, 2> kSide = {"left", "right"};
+
+bool exists(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+void requireAtLeast(const Params& p, const std::string& name, double min, bool strict) {
+  const double v = p.getDouble(name);
+  if (!std::isfinite(v) || v < min || (strict && v == min)) {
+    throw ConfigError("parameter '" + name + "' must be " + (strict ? "> " : ">= ") +
+                      std::to_string(min) + ", got " + std::to_string(v));
+  }
+}
+
+std::string joined(const std::vector<std::string>& parts) {
+  std::string out;
+  for (const auto& s : parts) out += (out.empty() ? "" : "; ") + s;
+  return out;
+}
+
+}  // namespace
+
+void declareCameraParams(Params& p) {
+  p.add("left_source", "",
+        "left camera: V4L2 index or /dev/videoN, rtsp:// URL, GStreamer pipeline ending in "
+        "appsink, video file or image folder (rules in ptz_driver/README.md)");
+  p.add("right_source", "", "right camera, in the same forms");
+  p.add("left_timestamps", "",
+        "left video/folder capture times, one per line in us (empty: SOURCE.timestamps when it "
+        "exists, else frame index / rate)");
+  p.add("right_timestamps", "", "right video/folder capture times (as left_timestamps)");
+  p.add("loop", false, "files: play again from the start at the end, times continuing");
+  p.add("file_fps", 0.0, "Hz", "rate of files without timestamps (0: the video's own; folders 30)");
+  p.add("latency_s", 0.0, "s", "live sources: capture time = grab time minus this");
+  p.add("width", 640, "px",
+        "published width, other sizes resized (0: as delivered); asked of V4L2");
+  p.add("height", 480, "px", "published height (0: as delivered); asked of V4L2");
+  p.add("fps", 30.0, "Hz", "frame rate asked of V4L2 cameras (0: the driver's default)");
+  p.add("fourcc", "", "pixel format asked of V4L2 cameras, e.g. MJPG (empty: the driver's)");
+  p.add("pair_tolerance_s", 0.015, "s",
+        "pair frames whose capture times differ by at most this (keep below half a frame period)");
+  p.add("pair_buffer_frames", 30, "",
+        "frames a side waiting for a partner (live: the oldest beyond unmatched; files wait)");
+  p.add("no_pair_warn_s", 2.0, "s", "status ERROR when both sides deliver but none pair this long");
+  p.add("ptz_history_s", 2.0, "s", "PTZ_STATE kept for stamping frames");
+  p.add("max_ptz_extrapolation_s", 0.1, "s",
+        "frames further outside the PTZ_STATE history get the nearest state, counted ptz_stale");
+  p.add("max_rate_hz", 30.0, "Hz", "publish at most this many pairs a second (0: every pair)");
+  p.add("source_timeout_s", 2.0, "s", "a streaming source without a frame this long is reopened");
+  p.add("open_timeout_s", 5.0, "s", "a connection without a first frame this long is reopened");
+  p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure");
+  p.add("retry_max_s", 8.0, "s", "longest reconnection delay");
+}
+
+CameraConfig cameraConfigFrom(const Params& p) {
+  for (const char* name : {"file_fps", "latency_s", "fps", "pair_tolerance_s", "ptz_history_s",
+                           "max_ptz_extrapolation_s", "max_rate_hz"}) {
+    requireAtLeast(p, name, 0, false);
+  }
+  for (const char* name :
+       {"no_pair_warn_s", "source_timeout_s", "open_timeout_s", "retry_initial_s", "retry_max_s"}) {
+    requireAtLeast(p, name, 0, true);
+  }
+  if (p.getDouble("retry_max_s") < p.getDouble("retry_initial_s")) {
+    throw ConfigError("parameter 'retry_max_s' must be at least retry_initial_s");
+  }
+  const int width = p.getInt("width"), height = p.getInt("height");
+  if (width < 0 || height < 0 || (width == 0) != (height == 0) || width > 16384 || height > 16384) {
+    throw ConfigError("parameters 'width' and 'height' must both be 1..16384, or both 0");
+  }
+  if (p.getInt("pair_buffer_frames") < 1) {
+    throw ConfigError("parameter 'pair_buffer_frames' must be at least 1");
+  }
+  const std::string fourcc = p.getString("fourcc");
+  if (!fourcc.empty() && fourcc.size() != 4) {
+    throw ConfigError("parameter 'fourcc' must be four characters (e.g. MJPG), got '" + fourcc +
+                      "'");
+  }
+  CameraConfig c;
+  for (size_t s = 0; s < 2; ++s) {
+    const std::string side = kSide[s];
+    c.source[s] = parseSource(p.getString(side + "_source"), side + "_source");
+    CaptureOptions& o = c.capture[s];
+    o.width = width;
+    o.height = height;
+    o.fps = p.getDouble("fps");
+    o.fourcc = fourcc;
+    o.latency_s = p.getDouble("latency_s");
+    o.file_fps = p.getDouble("file_fps");
+    o.loop = p.getBool("loop");
+    const std::string ts = p.getString(side + "_timestamps");
+    if (c.source[s].live()) {
+      if (!ts.empty()) {
+        throw ConfigError("parameter '" + side + "_timestamps' is for video files and folders; " +
+                          side + "_source is a " + sourceKindName(c.source[s].kind));
+      }
+    } else if (!ts.empty()) {
+      o.timestamps = readTimestamps(ts);
+    } else if (exists(defaultTimestampsPath(c.source[s].text))) {
+      o.timestamps = readTimestamps(defaultTimestampsPath(c.source[s].text));
+    }
+  }
+  c.supervisor = {p.getDouble("source_timeout_s"), p.getDouble("open_timeout_s"),
+                  p.getDouble("retry_initial_s"), p.getDouble("retry_max_s")};
+  c.pairer = {std::llround(p.getDouble("pair_tolerance_s") * 1e6),
+              static_cast<size_t>(p.getInt("pair_buffer_frames")), p.getDouble("no_pair_warn_s")};
+  c.ptz_history_s = p.getDouble("ptz_history_s");
+  c.max_ptz_extrapolation_s = p.getDouble("max_ptz_extrapolation_s");
+  c.max_rate_hz = p.getDouble("max_rate_hz");
+  return c;
+}
+
+StereoCamera::StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories)
+    : config_(config),
+      sources_{SourceSupervisor("left source " + config.source[0].text, std::move(factories[0]),
+                                config.supervisor),
+               SourceSupervisor("right source " + config.source[1].text, std::move(factories[1]),
+                                config.supervisor)},
+      pairer_(config.pairer),
+      history_(config.ptz_history_s, config.max_ptz_extrapolation_s) {}
+
+bool StereoCamera::onPtzState(int64_t utime, const PtzPose& left, const PtzPose& right) {
+  return history_.add(utime, left, right);
+}
+
+std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
+  std::vector<CapturedFrame> frames;
+  for (size_t s = 0; s < 2; ++s) {
+    frames.clear();
+    // Recordings wait while their side has its pairing buffer full (the other side is behind,
+    // e.g. a slow decoder); a live camera cannot wait: its oldest frames are unmatched instead.
+    size_t room = static_cast<size_t>(-1);
+    if (!config_.source[s].live()) {
+      const size_t waiting = pairer_.waiting(static_cast<Side>(s));
+      room = waiting < config_.pairer.buffer_frames ? config_.pairer.buffer_frames - waiting : 0;
+    }
+    sources_[s].step(static_cast<double>(now_utime) * 1e-6, &frames, room);
+    for (auto& f : frames) {
+      if (f.resized) ++resized_[s];
+      pairer_.add(static_cast<Side>(s), std::move(f), now_utime);
+    }
+    if (!ended_[s] && sources_[s].state() == SourceSupervisor::State::kEnded) {
+      ended_[s] = true;
+      pairer_.setEnded(static_cast<Side>(s));
+    }
+  }
+  std::vector<StampedPair> out;
+  for (auto& pair : pairer_.takePairs()) {
+    const int64_t t = pair.left.capture_utime;
+    if (config_.max_rate_hz > 0) {
+      // At most max_rate_hz in capture time; a frame early by up to a quarter period passes.
+      const auto period = static_cast<int64_t>(1e6 / config_.max_rate_hz);
+      if (published_any_ && t < next_allowed_utime_ - period / 4) {
+        ++skipped_rate_;
+        continue;
+      }
+      next_allowed_utime_ = (published_any_ ? std::max(next_allowed_utime_, t) : t) + period;
+    }
+    published_any_ = true;
+    StampedPair sp;
+    const PtzLookup l = history_.at(Side::kLeft, pair.left.capture_utime);
+    const PtzLookup r = history_.at(Side::kRight, pair.right.capture_utime);
+    sp.left_pose = l.pose;
+    sp.right_pose = r.pose;
+    sp.ptz_stale = l.stale || r.stale;
+    if (sp.ptz_stale) ++ptz_stale_;
+    last_stale_ = sp.ptz_stale;
+    sp.first_arrival_utime = pair.first_arrival_utime;
+    sp.left = std::move(pair.left);
+    sp.right = std::move(pair.right);
+    out.push_back(std::move(sp));
+  }
+  return out;
+}
+
+bool StereoCamera::finished() const {
+  return ended_[0] && ended_[1] && pairer_.waiting(Side::kLeft) == 0 &&
+         pairer_.waiting(Side::kRight) == 0;
+}
+
+Health StereoCamera::health(int64_t now_utime, std::string* message) const {
+  const double now_s = static_cast<double>(now_utime) * 1e-6;
+  std::vector<std::string> errors, warnings;
+  for (const auto& s : sources_) {
+    const std::string problem = s.problem(now_s);
+    if (!problem.empty()) errors.push_back(problem);
+  }
+  const std::string no_pair = pairer_.noPairMessage(now_utime);
+  if (!no_pair.empty()) errors.push_back(no_pair);
+  if (last_stale_) {
+    warnings.push_back(
+        "frames without a PTZ_STATE near their capture time: stamped with the nearest state "
+        "(home without any)");
+  }
+  for (size_t s = 0; s < 2; ++s) {
+    if (ended_[s] && !ended_[1 - s]) warnings.push_back(std::string(kSide[s]) + " source ended");
+  }
+  if (!errors.empty()) {
+    *message = joined(errors);
+    return Health::kError;
+  }
+  *message = joined(warnings);
+  return warnings.empty() ? Health::kOk : Health::kWarn;
+}
+
+std::map<std::string, int64_t> StereoCamera::counters() const {
+  std::map<std::string, int64_t> c;
+  for (size_t s = 0; s < 2; ++s) {
+    const std::string side = kSide[s];
+    c["frames_" + side] = sources_[s].frames();
+    c["unmatched_" + side] = pairer_.unmatched(static_cast<Side>(s));
+    c["resized_" + side] = resized_[s];
+    c["reconnects_" + side] = sources_[s].reconnects();
+    c["source_overflow_" + side] = sources_[s].overflowed();
+    c["ended_" + side] = ended_[s] ? 1 : 0;
+  }
+  c["pairs"] = pairer_.pairs();
+  c["pairs_skipped_rate"] = skipped_rate_;
+  c["ptz_stale"] = ptz_stale_;
+  c["abandoned_readers"] = abandonedReaders();
+  return c;
+}
+
+std::vector<std::string> StereoCamera::takeEvents() {
+  std::vector<std::string> out;
+  for (auto& s : sources_) {
+    for (auto& e : s.takeEvents()) out.push_back(std::move(e));
+  }
+  return out;
+}
+
+}  // namespace ptz::driver

@@ -1,0 +1,285 @@
+// ptz-camera playing a stereo pair of video files recorded here from the simulator's renderer
+// (MJPG in .avi, with timestamps files), each frame's number drawn into its corner as big blocks:
+// the right stream 8 ms late (tolerance 12 ms) with known frames dropped on both sides, stamped
+// from PTZ_STATE messages the test publishes; then 18 ms late, where nothing may pair and the
+// status must say so.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <array>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <set>
+
+#include "ptz/transport.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+#include "sim/renderer.hpp"
+#include "support/child_process.hpp"
+#include "support/lcm_wait.hpp"
+
+using namespace std::chrono_literals;
+using ptz::test::ChildProcess;
+
+namespace {
+
+constexpr int kFrames = 60;
+constexpr int64_t kPeriodUs = 40'000;  // recorded at 25 Hz
+constexpr int kBlockPx = 24;           // 9 blocks: the frame number (8 bits) and the side
+
+// The scene at 25 Hz seen by both cameras at home, frame numbers drawn in; rendered once.
+const std::array<std::vector<cv::Mat>, 2>& recording() {
+  static const auto frames = [] {
+    ptz::sim::Scene scene;
+    ptz::sim::SceneObject ball;
+    ball.name = "ball";
+    ball.color_bgr = {30, 30, 210};
+    ball.trajectory.type = ptz::sim::Trajectory::Type::kCircle;
+    ball.trajectory.centre_m = {0.0, 0.0, 3.0};
+    ball.trajectory.amplitude_m = {0.5, 0.3, 0.0};
+    ball.trajectory.period_s = 2.0;
+    scene.objects = {ball};
+    const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+    ptz::sim::Renderer renderer(scene);
+    std::array<std::vector<cv::Mat>, 2> out;
+    for (int k = 0; k < kFrames; ++k) {
+      for (int side = 0; side < 2; ++side) {
+        cv::Mat img;
+        renderer.render(rig.view(static_cast<ptz::Side>(side), {}), k * kPeriodUs * 1e-6, &img);
+        for (int bit = 0; bit < 9; ++bit) {
+          const bool on = bit < 8 ? (k >> bit) & 1 : side == 1;
+          cv::rectangle(img, cv::Rect(bit * kBlockPx, 0, kBlockPx, kBlockPx),
+                        cv::Scalar::all(on ? 255 : 0), cv::FILLED);
+        }
+        out[static_cast<size_t>(side)].push_back(img);
+      }
+    }
+    return out;
+  }();
+  return frames;
+}
+
+// The frame number and side drawn into an image (-1 when the blocks are unreadable).
+std::pair<int, int> readCode(const cv::Mat& img) {
+  int code = 0;
+  for (int bit = 0; bit < 9; ++bit) {
+    const cv::Rect inner(bit * kBlockPx + 6, 6, kBlockPx - 12, kBlockPx - 12);
+    const double v = cv::mean(img(inner))[0];
+    if (v > 60 && v < 195) return {-1, -1};
+    if (v >= 195) code |= 1 << bit;
+  }
+  return {code & 0xFF, code >> 8};
+}
+
+// Writes the frames of one side (without the dropped ones) to video_path (MJPG) and their times
+// (first + k * period + delay) beside it, one per line in microseconds.
+void record(int side, const std::string& video_path, const std::string& timestamps_path,
+            int64_t first_utime, int64_t delay_us, const std::set<int>& dropped) {
+  cv::VideoWriter w(video_path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25.0,
+                    cv::Size(640, 480));
+  ASSERT_TRUE(w.isOpened()) << video_path;
+  w.set(cv::VIDEOWRITER_PROP_QUALITY, 95);
+  FILE* ts = std::fopen(timestamps_path.c_str(), "w");
+  ASSERT_NE(ts, nullptr);
+  for (int k = 0; k < kFrames; ++k) {
+    if (dropped.count(k)) continue;
+    w.write(recording()[static_cast<size_t>(side)][static_cast<size_t>(k)]);
+    std::fprintf(ts, "%lld\n", static_cast<long long>(first_utime + k * kPeriodUs + delay_us));
+  }
+  std::fclose(ts);
+}
+
+// Known PTZ: linear in time from t0, the right camera mirrored in pan (linear interpolation of a
+// linear function is exact).
+ptzstereo::ptz_head_state_t head(int side, int64_t utime, int64_t t0) {
+  const double t = static_cast<double>(utime - t0) * 1e-6;
+  ptzstereo::ptz_head_state_t h{};
+  h.pan_rad = (side == 0 ? 1 : -1) * (0.1 + 0.2 * t);
+  h.tilt_rad = -0.05 + 0.1 * t;
+  h.zoom = 1.0 + 0.5 * t;
+  return h;
+}
+
+struct TempDir {
+  std::string path;
+  TempDir() {
+    char tmpl[] = "/tmp/ptz_camera_process_XXXXXX";
+    path = ::mkdtemp(tmpl);
+  }
+  ~TempDir() { std::system(("rm -rf '" + path + "'").c_str()); }
+};
+
+struct Listener {
+  std::vector<ptzstereo::stereo_frame_t> frames;
+  std::map<std::string, int64_t> counters;
+  int8_t state = -1;
+  std::string message;
+  int64_t statuses = 0, states_in = 0;
+  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::stereo_frame_t* m) {
+    frames.push_back(*m);
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
+                const ptzstereo::process_status_t* m) {
+    ++statuses;
+    state = m->state;
+    message = m->message;
+    for (const auto& c : m->counters) counters[c.name] = c.value;
+    for (const auto& ch : m->channels) {
+      if (ch.channel == "PTZ_STATE") states_in = ch.messages;
+    }
+  }
+};
+
+std::vector<std::string> cameraArgs(const TempDir& dir, const std::vector<std::string>& extra) {
+  std::vector<std::string> args = {PTZ_CAMERA_BIN,
+                                   "--lcm-url",
+                                   ptz::test::kTestUrl,
+                                   "--left-source",
+                                   dir.path + "/left.avi",
+                                   "--right-source",
+                                   dir.path + "/right.avi",
+                                   "--pair-tolerance-s",
+                                   "0.012",
+                                   "--status-period-s",
+                                   "0.1",
+                                   "--max-rate-hz",
+                                   "0"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+}  // namespace
+
+TEST(CameraProcess, PlaysARecordedPairPairingByTimeAndStampingThePtzOfEachImage) {
+  TempDir dir;
+  ASSERT_EQ(::mkdir((dir.path + "/stage").c_str(), 0755), 0);
+  const int64_t t0 = ptz::wallUtime() / 1000 * 1000;
+  const std::set<int> drop_left = {33}, drop_right = {7, 20, 21};
+  record(0, dir.path + "/stage/left.avi", dir.path + "/left.avi.timestamps", t0, 0, drop_left);
+  record(1, dir.path + "/stage/right.avi", dir.path + "/right.avi.timestamps", t0, 8'000,
+         drop_right);
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  Listener l;
+  lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &Listener::onStatus, &l);
+  // The videos are not there yet: ptz-camera retries them while the test publishes PTZ_STATE
+  // covering the whole recording, so that every frame finds its states.
+  ChildProcess camera(
+      cameraArgs(dir, {"--encoding", "jpeg", "--jpeg-quality", "95", "--retry-initial-s", "0.2",
+                       "--retry-max-s", "0.2", "--ptz-history-s", "60"}));
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.message.find("is missing or unreadable") != std::string::npos; }, 10s))
+      << l.message;
+  EXPECT_EQ(l.state, ptzstereo::process_status_t::STATE_ERROR);
+  EXPECT_NE(l.message.find("left source " + dir.path + "/left.avi: cannot open: video file"),
+            std::string::npos)
+      << l.message;
+  int64_t published = 0;
+  for (int64_t t = t0 - 500'000; t <= t0 + kFrames * kPeriodUs + 500'000; t += 20'000) {
+    ptzstereo::ptz_state_t s{};
+    s.utime = t;
+    s.publish_utime = ptz::wallUtime();
+    s.left = head(0, t, t0);
+    s.right = head(1, t, t0);
+    lcm.publish("PTZ_STATE", &s);
+    ++published;
+  }
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.states_in == published; }, 10s))
+      << l.states_in << " of " << published << " states arrived";
+  for (const char* name : {"left.avi", "right.avi"}) {
+    ASSERT_EQ(std::rename((dir.path + "/stage/" + name).c_str(), (dir.path + "/" + name).c_str()),
+              0);
+  }
+  ptz::test::handleUntil(
+      lcm, [&] { return camera.wait(0ms) >= 0; }, 30s);
+  ptz::test::drain(lcm, 300ms);
+  ASSERT_EQ(camera.wait(0ms), 0) << "ptz-camera exits 0 when both files ended";
+
+  const int expected_pairs = kFrames - 4;  // 7, 20, 21 and 33 lost their partners
+  EXPECT_EQ(l.counters["pairs"], expected_pairs);
+  EXPECT_EQ(l.counters["unmatched_left"], 3);
+  EXPECT_EQ(l.counters["unmatched_right"], 1);
+  EXPECT_EQ(l.counters["ptz_stale"], 0);
+  EXPECT_EQ(l.counters["ended_left"], 1);
+  EXPECT_EQ(l.counters["ended_right"], 1);
+  EXPECT_GE(l.counters["reconnects_left"], 1);  // the missing file was retried
+  ASSERT_EQ(static_cast<int>(l.frames.size()), expected_pairs);
+  std::set<int> seen;
+  double worst_diff = 0;
+  for (size_t i = 0; i < l.frames.size(); ++i) {
+    const auto& m = l.frames[i];
+    EXPECT_EQ(m.seq, static_cast<int64_t>(i));
+    cv::Mat left, right;
+    std::string error;
+    ASSERT_TRUE(ptz::decodeImage(m.left, &left, &error)) << error;
+    ASSERT_TRUE(ptz::decodeImage(m.right, &right, &error)) << error;
+    const auto [kl, side_l] = readCode(left);
+    const auto [kr, side_r] = readCode(right);
+    ASSERT_GE(kl, 0);
+    EXPECT_EQ(kl, kr) << "pair " << i << ": left frame " << kl << ", right frame " << kr;
+    EXPECT_EQ(side_l, 0);
+    EXPECT_EQ(side_r, 1);
+    seen.insert(kl);
+    EXPECT_EQ(m.utime, t0 + kl * kPeriodUs);  // the pair's time is the left image's
+    const auto hl = head(0, t0 + kl * kPeriodUs, t0);
+    const auto hr = head(1, t0 + kl * kPeriodUs + 8'000, t0);  // the right one's own time
+    EXPECT_NEAR(m.left.pan_rad, hl.pan_rad, 1e-9);
+    EXPECT_NEAR(m.left.tilt_rad, hl.tilt_rad, 1e-9);
+    EXPECT_NEAR(m.left.zoom, hl.zoom, 1e-9);
+    EXPECT_NEAR(m.right.pan_rad, hr.pan_rad, 1e-9);
+    EXPECT_NEAR(m.right.tilt_rad, hr.tilt_rad, 1e-9);
+    EXPECT_NEAR(m.right.zoom, hr.zoom, 1e-9);
+    // The images are the ones rendered for that instant (MJPG then JPEG: a few grey levels).
+    cv::Mat diff;
+    cv::absdiff(left, recording()[0][static_cast<size_t>(kl)], diff);
+    worst_diff = std::max(worst_diff, cv::mean(diff)[0]);
+    cv::absdiff(right, recording()[1][static_cast<size_t>(kl)], diff);
+    worst_diff = std::max(worst_diff, cv::mean(diff)[0]);
+  }
+  EXPECT_EQ(seen.size(), static_cast<size_t>(expected_pairs));
+  EXPECT_EQ(seen.count(7) + seen.count(20) + seen.count(21) + seen.count(33), 0u);
+  EXPECT_LT(worst_diff, 4.0);
+  std::printf(
+      "pairs %zu, worst mean difference to the rendered image %.2f grey levels, "
+      "pair wait p50 %.1f ms p99 %.1f ms\n",
+      l.frames.size(), worst_diff, l.counters["pair_wait_us_p50"] / 1000.0,
+      l.counters["pair_wait_us_p99"] / 1000.0);
+}
+
+TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
+  TempDir dir;
+  const int64_t t0 = ptz::wallUtime() / 1000 * 1000;
+  record(0, dir.path + "/left.avi", dir.path + "/left.avi.timestamps", t0, 0, {});
+  record(1, dir.path + "/right.avi", dir.path + "/right.avi.timestamps", t0, 18'000, {});
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  Listener l;
+  lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &Listener::onStatus, &l);
+  const auto start = std::chrono::steady_clock::now();
+  ChildProcess camera(cameraArgs(dir, {"--no-pair-warn-s", "1.0"}));
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.message.find("no stereo pair") != std::string::npos; }, 10s))
+      << l.message;
+  const double after_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(l.state, ptzstereo::process_status_t::STATE_ERROR);
+  EXPECT_NE(l.message.find(": right is 0.018 s behind left (tolerance 0.012 s); check the clocks "
+                           "or raise pair_tolerance_s"),
+            std::string::npos)
+      << l.message;
+  EXPECT_LE(after_s, 1.0 + 1.5) << "no_pair_warn_s 1.0 plus start-up and a status period";
+  ptz::test::handleUntil(
+      lcm, [&] { return camera.wait(0ms) >= 0; }, 30s);
+  ptz::test::drain(lcm, 300ms);
+  ASSERT_EQ(camera.wait(0ms), 0);
+  EXPECT_TRUE(l.frames.empty());
+  EXPECT_EQ(l.counters["pairs"], 0);
+  EXPECT_EQ(l.counters["unmatched_left"], kFrames);
+  EXPECT_EQ(l.counters["unmatched_right"], kFrames);
+  std::printf("no-pair ERROR %.2f s after start: %s\n", after_s, l.message.c_str());
+}
