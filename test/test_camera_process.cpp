@@ -19,60 +19,24 @@
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/renderer.hpp"
+#include "support/camera_recording.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
 
 using namespace std::chrono_literals;
+using ptz::test::CameraListener;
 using ptz::test::ChildProcess;
+using ptz::test::readCode;
+using ptz::test::TempDir;
 
 namespace {
 
 constexpr int kFrames = 60;
 constexpr int64_t kPeriodUs = 40'000;  // recorded at 25 Hz
-constexpr int kBlockPx = 24;           // 9 blocks: the frame number (8 bits) and the side
 
-// The scene at 25 Hz seen by both cameras at home, frame numbers drawn in; rendered once.
 const std::array<std::vector<cv::Mat>, 2>& recording() {
-  static const auto frames = [] {
-    ptz::sim::Scene scene;
-    ptz::sim::SceneObject ball;
-    ball.name = "ball";
-    ball.color_bgr = {30, 30, 210};
-    ball.trajectory.type = ptz::sim::Trajectory::Type::kCircle;
-    ball.trajectory.centre_m = {0.0, 0.0, 3.0};
-    ball.trajectory.amplitude_m = {0.5, 0.3, 0.0};
-    ball.trajectory.period_s = 2.0;
-    scene.objects = {ball};
-    const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
-    ptz::sim::Renderer renderer(scene);
-    std::array<std::vector<cv::Mat>, 2> out;
-    for (int k = 0; k < kFrames; ++k) {
-      for (int side = 0; side < 2; ++side) {
-        cv::Mat img;
-        renderer.render(rig.view(static_cast<ptz::Side>(side), {}), k * kPeriodUs * 1e-6, &img);
-        for (int bit = 0; bit < 9; ++bit) {
-          const bool on = bit < 8 ? (k >> bit) & 1 : side == 1;
-          cv::rectangle(img, cv::Rect(bit * kBlockPx, 0, kBlockPx, kBlockPx),
-                        cv::Scalar::all(on ? 255 : 0), cv::FILLED);
-        }
-        out[static_cast<size_t>(side)].push_back(img);
-      }
-    }
-    return out;
-  }();
+  static const auto frames = ptz::test::renderCodedPair(kFrames, kPeriodUs * 1e-6);
   return frames;
-}
-
-// The frame number and side drawn into an image (-1 when the blocks are unreadable).
-std::pair<int, int> readCode(const cv::Mat& img) {
-  int code = 0;
-  for (int bit = 0; bit < 9; ++bit) {
-    const cv::Rect inner(bit * kBlockPx + 6, 6, kBlockPx - 12, kBlockPx - 12);
-    const double v = cv::mean(img(inner))[0];
-    if (v > 60 && v < 195) return {-1, -1};
-    if (v >= 195) code |= 1 << bit;
-  }
-  return {code & 0xFF, code >> 8};
 }
 
 // Writes the frames of one side (without the dropped ones) to video_path (MJPG) and their times
@@ -104,36 +68,6 @@ ptzstereo::ptz_head_state_t head(int side, int64_t utime, int64_t t0) {
   return h;
 }
 
-struct TempDir {
-  std::string path;
-  TempDir() {
-    char tmpl[] = "/tmp/ptz_camera_process_XXXXXX";
-    path = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { std::system(("rm -rf '" + path + "'").c_str()); }
-};
-
-struct Listener {
-  std::vector<ptzstereo::stereo_frame_t> frames;
-  std::map<std::string, int64_t> counters;
-  int8_t state = -1;
-  std::string message;
-  int64_t statuses = 0, states_in = 0;
-  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::stereo_frame_t* m) {
-    frames.push_back(*m);
-  }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
-                const ptzstereo::process_status_t* m) {
-    ++statuses;
-    state = m->state;
-    message = m->message;
-    for (const auto& c : m->counters) counters[c.name] = c.value;
-    for (const auto& ch : m->channels) {
-      if (ch.channel == "PTZ_STATE") states_in = ch.messages;
-    }
-  }
-};
-
 std::vector<std::string> cameraArgs(const TempDir& dir, const std::vector<std::string>& extra) {
   std::vector<std::string> args = {PTZ_CAMERA_BIN,
                                    "--lcm-url",
@@ -163,9 +97,9 @@ TEST(CameraProcess, PlaysARecordedPairPairingByTimeAndStampingThePtzOfEachImage)
   record(1, dir.path + "/stage/right.avi", dir.path + "/right.avi.timestamps", t0, 8'000,
          drop_right);
   lcm::LCM lcm(ptz::test::kTestUrl);
-  Listener l;
-  lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
-  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &Listener::onStatus, &l);
+  CameraListener l;
+  lcm.subscribe("STEREO_FRAME", &CameraListener::onFrame, &l);
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
   // The videos are not there yet: ptz-camera retries them while the test publishes PTZ_STATE
   // covering the whole recording, so that every frame finds its states.
   ChildProcess camera(
@@ -257,9 +191,9 @@ TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
   record(0, dir.path + "/left.avi", dir.path + "/left.avi.timestamps", t0, 0, {});
   record(1, dir.path + "/right.avi", dir.path + "/right.avi.timestamps", t0, 18'000, {});
   lcm::LCM lcm(ptz::test::kTestUrl);
-  Listener l;
-  lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
-  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &Listener::onStatus, &l);
+  CameraListener l;
+  lcm.subscribe("STEREO_FRAME", &CameraListener::onFrame, &l);
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
   const auto start = std::chrono::steady_clock::now();
   ChildProcess camera(cameraArgs(dir, {"--no-pair-warn-s", "1.0"}));
   ASSERT_TRUE(ptz::test::handleUntil(

@@ -1,0 +1,161 @@
+// ptz-camera against real RTSP servers on 127.0.0.1 (gst-rtsp-server, as IP PTZ cameras serve
+// their video): two feeds recorded from the simulator's renderer, consumed through OpenCV's
+// GStreamer backend, paired and published as STEREO_FRAME. Stopping the right server mid-stream
+// must give an ERROR status naming the source, and its restart a reconnection after which the
+// pairs come again.
+#include <gtest/gtest.h>
+
+#include <opencv2/videoio.hpp>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+
+#include "ptz/transport.hpp"
+#include "support/camera_recording.hpp"
+#include "support/child_process.hpp"
+#include "support/lcm_wait.hpp"
+
+using namespace std::chrono_literals;
+using ptz::test::CameraListener;
+using ptz::test::ChildProcess;
+
+namespace {
+
+constexpr int kFrames = 250;  // 10 s at 25 Hz: longer than the test streams
+constexpr double kPeriodS = 0.04;
+const std::string kLeftUrl = "rtsp://127.0.0.1:8554/left";
+const std::string kRightUrl = "rtsp://127.0.0.1:8555/right";
+
+void writeVideo(const std::vector<cv::Mat>& frames, const std::string& path) {
+  cv::VideoWriter w(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 1.0 / kPeriodS,
+                    frames.front().size());
+  ASSERT_TRUE(w.isOpened()) << path;
+  for (const auto& f : frames) w.write(f);
+}
+
+std::unique_ptr<ChildProcess> server(const std::string& port, const std::string& mount,
+                                     const std::string& file) {
+  return std::make_unique<ChildProcess>(
+      std::vector<std::string>{PTZ_RTSP_SERVER_BIN, port, mount, file});
+}
+
+// What the pairs from `first` on say: every image a recorded frame of its own side, each
+// side's frames in order and used once, and the left − right frame offsets.
+struct PairCheck {
+  std::map<int, int> offsets;  // offset -> pairs
+  int unreadable = 0, out_of_order = 0, pairs = 0;
+  // The share of pairs within one frame of the most common offset (the tolerance is half a
+  // period, so an arrival jitter may shift a partner by one), and that offset.
+  std::pair<double, int> consistency() const {
+    int mode = 0, best = 0;
+    for (const auto& [o, n] : offsets) {
+      if (n > best) best = n, mode = o;
+    }
+    int near = 0;
+    for (const auto& [o, n] : offsets) near += std::abs(o - mode) <= 1 ? n : 0;
+    return {pairs ? static_cast<double>(near) / pairs : 0.0, mode};
+  }
+};
+
+PairCheck checkPairs(const std::vector<ptzstereo::stereo_frame_t>& frames, size_t first) {
+  PairCheck c;
+  int last_l = -1, last_r = -1;
+  for (size_t i = first; i < frames.size(); ++i) {
+    cv::Mat left, right;
+    std::string error;
+    EXPECT_TRUE(ptz::decodeImage(frames[i].left, &left, &error)) << error;
+    EXPECT_TRUE(ptz::decodeImage(frames[i].right, &right, &error)) << error;
+    const auto [kl, side_l] = ptz::test::readCode(left);
+    const auto [kr, side_r] = ptz::test::readCode(right);
+    if (kl < 0 || kr < 0 || side_l != 0 || side_r != 1) {
+      ++c.unreadable;
+      continue;
+    }
+    if (kl <= last_l || kr <= last_r) ++c.out_of_order;
+    last_l = kl;
+    last_r = kr;
+    ++c.offsets[kl - kr];
+    ++c.pairs;
+  }
+  return c;
+}
+
+}  // namespace
+
+TEST(CameraRtsp, PairsTwoRtspFeedsAndReconnectsWhenAServerComesBack) {
+  ptz::test::TempDir dir;
+  {
+    const auto rec = ptz::test::renderCodedPair(kFrames, kPeriodS);
+    writeVideo(rec[0], dir.path + "/left.avi");
+    writeVideo(rec[1], dir.path + "/right.avi");
+  }
+  auto left_server = server("8554", "left", dir.path + "/left.avi");
+  auto right_server = server("8555", "right", dir.path + "/right.avi");
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  CameraListener l;
+  lcm.subscribe("STEREO_FRAME", &CameraListener::onFrame, &l);
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
+  // Unsynchronised live feeds at 25 Hz: a partner is always within half a period.
+  ChildProcess camera({PTZ_CAMERA_BIN, "--lcm-url", ptz::test::kTestUrl, "--left-source", kLeftUrl,
+                       "--right-source", kRightUrl, "--pair-tolerance-s", "0.02", "--encoding",
+                       "jpeg", "--status-period-s", "0.1", "--retry-initial-s", "0.2",
+                       "--retry-max-s", "0.4", "--max-rate-hz", "0"});
+
+  // Streaming: pairs of frames recorded for the same instant, consistently.
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.frames.size() >= 40; }, 20s))
+      << l.frames.size() << " pairs; status: " << l.message;
+  // No PTZ_STATE in this test: the status may WARN about the stamping, never ERROR.
+  EXPECT_NE(l.state, ptzstereo::process_status_t::STATE_ERROR) << l.message;
+  const PairCheck before = checkPairs(l.frames, 0);
+  EXPECT_EQ(before.unreadable, 0) << "images garbled or of the wrong side";
+  EXPECT_EQ(before.out_of_order, 0) << "a frame published twice or out of order";
+  const auto [share_before, offset_before] = before.consistency();
+  EXPECT_GE(share_before, 0.95) << "pairs jump between partners";
+
+  // The right camera goes away: an ERROR naming it, nothing published without it.
+  right_server->stop();
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm,
+      [&] {
+        return l.state == ptzstereo::process_status_t::STATE_ERROR &&
+               l.message.find("right source " + kRightUrl) != std::string::npos;
+      },
+      10s))
+      << l.message;
+  const std::string error_message = l.message;
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["reconnects_right"] >= 2; }, 10s))
+      << "retries while the server is down: " << l.counters["reconnects_right"];
+  const size_t pairs_while_down = l.frames.size();
+
+  // It comes back: ptz-camera reconnects by itself and pairs again.
+  right_server = server("8555", "right", dir.path + "/right.avi");
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm,
+      [&] {
+        return l.frames.size() >= pairs_while_down + 40 &&
+               l.state != ptzstereo::process_status_t::STATE_ERROR;
+      },
+      20s))
+      << l.frames.size() - pairs_while_down << " pairs after the restart; status: " << l.message;
+  const PairCheck after = checkPairs(l.frames, pairs_while_down);
+  EXPECT_EQ(after.unreadable, 0);
+  EXPECT_EQ(after.out_of_order, 0);
+  const auto [share_after, offset_after] = after.consistency();
+  EXPECT_GE(share_after, 0.95) << "pairs jump between partners after the reconnection";
+  EXPECT_EQ(camera.stop(), 0);
+  left_server->stop();
+  right_server->stop();
+  std::printf(
+      "RTSP: %zu pairs before the stop (%.0f %% within a frame of offset %d), error \"%s\", %lld "
+      "reconnects of the right source, %zu pairs after (%.0f %% within a frame of offset %d), "
+      "unmatched left "
+      "%lld right %lld, pair wait p50 %.1f ms p99 %.1f ms\n",
+      pairs_while_down, 100 * share_before, offset_before, error_message.c_str(),
+      static_cast<long long>(l.counters["reconnects_right"]), l.frames.size() - pairs_while_down,
+      100 * share_after, offset_after, static_cast<long long>(l.counters["unmatched_left"]),
+      static_cast<long long>(l.counters["unmatched_right"]),
+      l.counters["pair_wait_us_p50"] / 1000.0, l.counters["pair_wait_us_p99"] / 1000.0);
+}
