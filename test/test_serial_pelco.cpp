@@ -174,11 +174,16 @@ TEST_F(PelcoSerial, WithoutQueriesThePoseIsTheEstimateOfThePlantModel) {
     EXPECT_NEAR(head.measured()->tilt_rad, bus.pose(0, t).tilt_rad, 1e-9);
     EXPECT_NEAR(head.measured()->zoom, bus.pose(0, t).zoom, 1e-9);
   }
-  // The stop: the estimate holds where it has got to.
-  head.inquire(3.1, 0.1);
+  // Stopped on the way to -0.5 rad: the estimate holds where it has got to.
+  head.command({-0.5, 0.2, 4.0}, 6.0);
+  serve(bus, 1, 6.0);
+  head.inquire(6.1, 0.1);
   const double at_stop = head.measured()->pan_rad;
-  EXPECT_TRUE(head.stop(3.1, 1.0));
-  head.inquire(4.0, 0.1);
+  const double at_6 = pan * (1 - std::exp(-3.0 / kT));  // 3 s after the move to `pan`
+  const double to = model.panRad(model.panCentideg(-0.5));
+  EXPECT_NEAR(at_stop, at_6 + (to - at_6) * (1 - std::exp(-0.1 / kT)), 1e-9);
+  EXPECT_TRUE(head.stop(6.1, 1.0));
+  head.inquire(7.0, 0.1);
   EXPECT_NEAR(head.measured()->pan_rad, at_stop, 1e-9);
 }
 

@@ -192,6 +192,18 @@ TEST_F(ViscaSerial, ASilentCameraGivesTimeoutsAndResends) {
   EXPECT_FALSE(left.measured());
 }
 
+TEST_F(ViscaSerial, AReplyThatSkipsARequestMeansThatRequestsReplyWasLost) {
+  left.inquire(0, 0.1);
+  left.command({0.5, 0.2, 4.0}, 0);
+  ASSERT_EQ(ptz::test::readViscaPackets(pty, 3).size(), 3u);  // inquiry, pan-tilt, zoom
+  pty.write({0x90, 0x41, 0xFF});  // the pan-tilt command's ACK: the inquiry's answer is lost
+  ASSERT_TRUE(read(0, [&] { return left.stats().timeouts == 1; }));
+  left.inquire(0.01, 0.1);  // asked again at once, not after the timeout
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 1),
+            std::vector<Bytes>{visca::panTiltPositionInquiry(1)});
+  EXPECT_EQ(left.stats().malformed, 0);
+}
+
 TEST_F(ViscaSerial, GarbageIsCountedAndSkipped) {
   startChain();
   const int64_t before = replies();
