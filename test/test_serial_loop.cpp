@@ -71,9 +71,10 @@ bool near(const ptzstereo::ptz_head_state_t& s, const ptz::PtzPose& p, double an
 // emulator on a pty; `angle` is the bound on the
 // state's distance from the setpoint once there (a few of the protocol's angle units).
 // stopped(emulator): the heads got the stop bytes (waited for after the driver's exit).
+// estimated: the heads cannot report their position (Pelco-D without queries).
 template <class Emulator>
 void followClampAndStop(Emulator* heads, const std::vector<std::string>& args, double angle,
-                        const std::function<bool(Emulator&)>& stopped) {
+                        const std::function<bool(Emulator&)>& stopped, bool estimated = false) {
   ptz::test::PtyPair pty;
   ptz::test::SerialServer<Emulator> server(pty, heads);
   lcm::LCM lcm(ptz::test::kTestUrl);
@@ -119,6 +120,10 @@ void followClampAndStop(Emulator* heads, const std::vector<std::string>& args, d
   });
   EXPECT_LE(highest, kPanMax + angle / 2) << "a head was told to go beyond the limit";
   EXPECT_GT(highest, kPanMax - angle);
+  // The head really is where PTZ_STATE says (for an estimate too: the same plant model).
+  const double real_pan =
+      server.with([&](Emulator& e) { return e.pose(0, server.nowS()).pan_rad; });
+  EXPECT_NEAR(real_pan, w.state->left.pan_rad, angle);
   const int64_t statuses = w.statuses;  // a status from after all that (1 Hz)
   EXPECT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return w.statuses > statuses; }, 3s));
@@ -128,7 +133,7 @@ void followClampAndStop(Emulator* heads, const std::vector<std::string>& args, d
               static_cast<long long>(w.counters["head_timeouts"]),
               static_cast<long long>(w.counters["head_malformed"]));
   EXPECT_EQ(w.counters["head_errors"], 0);
-  EXPECT_EQ(w.counters["position_estimated"], 0);
+  EXPECT_EQ(w.counters["position_estimated"], estimated ? 1 : 0);
   EXPECT_EQ(w.counters["head_malformed"], 0);
   EXPECT_EQ(driver.stop(), 0) << "SIGTERM: the driver stops the heads and exits cleanly";
   // The stop bytes left before the exit; the server may still be reading them.
@@ -144,6 +149,7 @@ struct PelcoMoves {
   PelcoDBusEmulator bus;
   std::vector<std::pair<int, ViscaTarget>> moves_;
   Bytes feed(const uint8_t* d, size_t n, double now_s) { return bus.feed(d, n, now_s); }
+  ptz::PtzPose pose(int head, double now_s) { return bus.pose(head, now_s); }
   const std::vector<std::pair<int, ViscaTarget>>& moves() {
     moves_.clear();
     for (const auto& [head, p] : bus.moves())
@@ -196,4 +202,23 @@ TEST(SerialLoop, PelcoDBusWithPositionQueriesFollowsClampsAndStopsOnSigterm) {
                                   model_path, "--pelco-position-query", "1"},
                                  5 * M_PI / 18000, stopped);
   EXPECT_EQ(heads.bus.badChecksums(), 0);
+}
+
+// Most Pelco-D heads cannot say where they are: PTZ_STATE is the plant model's estimate, which
+// starts once the heads must be home (2.3 s), and the status says so.
+TEST(SerialLoop, PelcoDBusWithoutQueriesReportsTheEstimate) {
+  const std::string model_path = kConfig + "pelco_d/generic.yaml";
+  PelcoMoves heads{
+      PelcoDBusEmulator(PelcoModel::load(model_path), ptz::defaultPlantParams(), {1, 2}, false),
+      {}};
+  auto stopped = [](PelcoMoves& e) {
+    const auto& got = e.bus.received();
+    return !got.empty() && got.back() == pelco_d::stop(2);
+  };
+  followClampAndStop<PelcoMoves>(
+      &heads, {"--config", kConfig + "driver_pelco_d.yaml", "--pelco-model", model_path},
+      5 * M_PI / 18000, stopped, true);
+  const auto& got = heads.bus.received();
+  ASSERT_GE(got.size(), 6u);
+  EXPECT_EQ(got[0], pelco_d::setPanPosition(1, 0));  // home first
 }

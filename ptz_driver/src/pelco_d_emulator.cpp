@@ -11,15 +11,9 @@ PelcoDBusEmulator::PelcoDBusEmulator(PelcoModel model, const PtzPlant::Params& p
                                      std::vector<int> addresses, bool answers_queries,
                                      const PtzPose& home)
     : model_(std::move(model)),
-      plant_(plant, home, home),
+      motors_(plant, home),
       addresses_(std::move(addresses)),
-      answers_queries_(answers_queries),
-      targets_{home, home} {}
-
-PtzPose PelcoDBusEmulator::pose(int head, double now_s) {
-  plant_.advanceTo(std::max(now_s, plant_.time()));
-  return plant_.pose(head == 0 ? Side::kLeft : Side::kRight);
-}
+      answers_queries_(answers_queries) {}
 
 Bytes PelcoDBusEmulator::feed(const uint8_t* data, size_t size, double now_s) {
   Bytes out;
@@ -44,7 +38,7 @@ Bytes PelcoDBusEmulator::feed(const uint8_t* data, size_t size, double now_s) {
 Bytes PelcoDBusEmulator::handle(size_t head, const Bytes& f, double now_s) {
   const PtzPose now = pose(static_cast<int>(head), now_s);
   const int value = f[4] << 8 | f[5];
-  PtzPose& t = targets_[head];
+  PtzPose t = motors_.target(static_cast<int>(head));
   if (f[2] == 0 && f[3] == 0 && f[4] == 0 && f[5] == 0) {
     t = now;  // stop: where it is
   } else if (f[2] == 0 && f[3] == 0x4B) {
@@ -63,8 +57,7 @@ Bytes PelcoDBusEmulator::handle(size_t head, const Bytes& f, double now_s) {
     }
     return {};  // a query it does not answer, or a command it does not know
   }
-  int clamped = 0, rejected = 0;
-  plant_.command(now_s, targets_[0], targets_[1], &clamped, &rejected);
+  motors_.moveTo(static_cast<int>(head), t, now_s);
   moves_.emplace_back(static_cast<int>(head), t);
   return {};
 }

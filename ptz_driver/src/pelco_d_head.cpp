@@ -143,9 +143,7 @@ void PelcoDHead::inquire(double now_s, double timeout_s) {
 }
 
 void PelcoDHead::receive(double now_s) {
-  book_.stats().malformed += line_->pump();
-  std::string error;
-  if (line_->takeError(&error)) book_.error(error);
+  line_->pump(&book_);
   while (line_->nextUnrouted()) ++book_.stats().malformed;  // from an address nobody has
   while (const auto r = line_->next(address_)) {
     if (!query_ || r->command2 != kReplyOf[*query_]) {

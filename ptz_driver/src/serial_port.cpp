@@ -1,6 +1,7 @@
 #include "ptz_driver/serial_port.hpp"
 
 #include <fcntl.h>
+#include <poll.h>
 #include <sys/ioctl.h>
 #include <termios.h>
 #include <unistd.h>
@@ -122,9 +123,17 @@ bool SerialPort::read(Bytes* data) {
       continue;
     }
     if (n < 0 && (errno == EAGAIN || errno == EINTR)) return true;
-    if (n == 0) return true;  // VMIN 0: nothing waiting
-    error_ = "serial device '" + device_ + "': " + std::strerror(errno);
-    return false;
+    if (n < 0) {
+      error_ = "serial device '" + device_ + "': " + std::strerror(errno);
+      return false;
+    }
+    // 0: nothing waiting (VMIN 0), or the device hung up (adapter unplugged): poll tells.
+    pollfd p{fd_, POLLIN, 0};
+    if (::poll(&p, 1, 0) == 1 && (p.revents & (POLLHUP | POLLERR))) {
+      error_ = "serial device '" + device_ + "' hung up (adapter unplugged?)";
+      return false;
+    }
+    return true;
   }
 }
 

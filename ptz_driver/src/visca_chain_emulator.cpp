@@ -7,14 +7,8 @@ namespace ptz::driver {
 ViscaChainEmulator::ViscaChainEmulator(const ViscaModel& model, const PtzPlant::Params& plant,
                                        int cameras, const PtzPose& home)
     : model_(model),
-      plant_(plant, home, home),
-      targets_{home, home},
+      motors_(plant, home),
       cameras_(static_cast<size_t>(std::clamp(cameras, 1, 2))) {}
-
-PtzPose ViscaChainEmulator::pose(int camera, double now_s) {
-  plant_.advanceTo(std::max(now_s, plant_.time()));
-  return plant_.pose(camera == 0 ? Side::kLeft : Side::kRight);
-}
 
 Bytes ViscaChainEmulator::feed(const uint8_t* data, size_t size, double now_s) {
   Bytes out;
@@ -94,12 +88,11 @@ Bytes ViscaChainEmulator::handleCommand(size_t c, const Bytes& p, double now_s) 
   ViscaTarget target;
   const std::vector<Bytes> replies = emulator.handle(p, now, &target);
   if (target.pan_rad || target.tilt_rad || target.zoom) {
-    PtzPose& t = targets_[c];
-    t.pan_rad = target.pan_rad.value_or(t.pan_rad);
-    t.tilt_rad = target.tilt_rad.value_or(t.tilt_rad);
-    t.zoom = target.zoom.value_or(t.zoom);
-    int clamped = 0, rejected = 0;
-    plant_.command(now_s, targets_[0], targets_[1], &clamped, &rejected);
+    const PtzPose& t = motors_.target(static_cast<int>(c));
+    motors_.moveTo(static_cast<int>(c),
+                   {target.pan_rad.value_or(t.pan_rad), target.tilt_rad.value_or(t.tilt_rad),
+                    target.zoom.value_or(t.zoom)},
+                   now_s);
     moves_.emplace_back(static_cast<int>(c), target);
   }
   // A command the camera takes: ACK on the free socket, completion later (see poll).

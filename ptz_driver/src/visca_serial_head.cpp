@@ -69,9 +69,7 @@ void ViscaSerialHead::inquire(double now_s, double timeout_s) {
 }
 
 void ViscaSerialHead::receive(double now_s) {
-  core_.stats().malformed += line_->pump();
-  std::string error;
-  if (line_->takeError(&error)) core_.book().error(error);
+  line_->pump(&core_.book());
   while (const auto r = line_->nextUnrouted()) onBroadcast(*r);
   while (const auto r = line_->next(core_.address())) handle(*r, now_s);
   core_.continueRound(now_s, sender(now_s, true));

@@ -30,13 +30,19 @@ class PtyPair {
     ::fcntl(master_, F_SETFL, ::fcntl(master_, F_GETFL) | O_NONBLOCK);
   }
   ~PtyPair() {
-    ::close(master_);
-    ::close(slave_);  // kept open so the master never reads EIO between two heads' lives
+    if (master_ >= 0) ::close(master_);
+    if (slave_ >= 0) ::close(slave_);  // kept open so the master never reads EIO meanwhile
   }
   PtyPair(const PtyPair&) = delete;
   PtyPair& operator=(const PtyPair&) = delete;
 
   const std::string& path() const { return path_; }
+  // The far end goes away, as when a USB adapter is unplugged: the slave side hangs up.
+  void hangUp() {
+    ::close(master_);
+    ::close(slave_);
+    master_ = slave_ = -1;
+  }
   int master() const { return master_; }
 
   void write(const Bytes& b) const {

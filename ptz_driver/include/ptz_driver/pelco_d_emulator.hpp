@@ -9,7 +9,7 @@
 #include <array>
 #include <vector>
 
-#include "ptz/plant.hpp"
+#include "ptz_driver/emulated_motors.hpp"
 #include "ptz_driver/pelco_model.hpp"
 #include "ptz_driver/visca.hpp"  // Bytes
 
@@ -23,7 +23,7 @@ class PelcoDBusEmulator {
   // Bytes from the controller at now_s; returns what the heads send back.
   Bytes feed(const uint8_t* data, size_t size, double now_s);
   // Where head (0, 1) is at now_s.
-  PtzPose pose(int head, double now_s);
+  PtzPose pose(int head, double now_s) { return motors_.pose(head, now_s); }
   // Every well-formed frame received, in order, and the frames with a bad checksum.
   const std::vector<Bytes>& received() const { return received_; }
   int64_t badChecksums() const { return bad_checksums_; }
@@ -34,10 +34,9 @@ class PelcoDBusEmulator {
   Bytes handle(size_t head, const Bytes& frame, double now_s);
 
   PelcoModel model_;
-  PtzPlant plant_;
+  EmulatedMotors motors_;
   std::vector<int> addresses_;
   bool answers_queries_;
-  std::array<PtzPose, 2> targets_;
   Bytes partial_;
   std::vector<Bytes> received_;
   int64_t bad_checksums_ = 0;

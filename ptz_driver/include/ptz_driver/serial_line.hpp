@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "ptz_driver/head_book.hpp"
 #include "ptz_driver/pelco_d.hpp"
 #include "ptz_driver/serial_port.hpp"
 #include "ptz_driver/visca.hpp"
@@ -63,29 +64,28 @@ class SerialLine {
   void doesNotWant(int address) { wanting_.erase(address); }
 
   // Reads what arrived and routes every reply to its address's inbox; replies from addresses
-  // nobody attached and broadcasts go to unrouted. Returns the garbage seen since the last
-  // call, for the caller's stats (so a shared line's garbage is counted once).
-  int64_t pump() {
+  // nobody attached and broadcasts go to unrouted. The garbage seen since the last call and a
+  // transport error (the device gone; once, until it works again) go to the caller's book, so
+  // a shared line's are counted once.
+  void pump(HeadBook* book) {
     Bytes data;
-    if (!port_.read(&data)) error_ = port_.error();
+    const bool ok = port_.read(&data) && error_.empty();
+    if (!ok && !failed_) book->error(error_.empty() ? port_.error() : error_);  // once
+    failed_ = !ok;
+    error_.clear();
     parser_.feed(data.data(), data.size());
     while (auto r = parser_.next()) {
       const auto it = inbox_.find(r->address);
       (it == inbox_.end() ? unrouted_ : it->second).push_back(std::move(*r));
     }
     const int64_t garbage = garbageOf(parser_);
-    return garbage - std::exchange(garbage_counted_, garbage);
+    book->stats().malformed += garbage - std::exchange(garbage_counted_, garbage);
   }
   std::optional<Reply> next(int address) { return pop(&inbox_[address]); }
   std::optional<Reply> nextUnrouted() { return pop(&unrouted_); }
-  // A transport error since the last call (the device gone), for the caller to report once.
-  bool takeError(std::string* error) {
-    if (error_.empty()) return false;
-    *error = std::exchange(error_, std::string());
-    return true;
-  }
 
-  int fd() const { return port_.fd(); }
+  // -1 once the device has failed: a hung-up descriptor would wake every poll at once.
+  int fd() const { return failed_ ? -1 : port_.fd(); }
   const std::string& device() const { return port_.device(); }
 
  private:
@@ -105,7 +105,8 @@ class SerialLine {
   double reply_awaited_until_s_ = -1;
   std::set<int> wanting_;
   int last_talker_ = -1;
-  std::string error_;
+  std::string error_;  // of a write
+  bool failed_ = false;
 };
 
 using ViscaSerialLine = SerialLine<visca::ReplyParser, visca::Reply>;

@@ -12,7 +12,7 @@
 #include <optional>
 #include <vector>
 
-#include "ptz/plant.hpp"
+#include "ptz_driver/emulated_motors.hpp"
 #include "ptz_driver/visca_camera.hpp"
 
 namespace ptz::driver {
@@ -35,7 +35,7 @@ class ViscaChainEmulator {
   void setSilent(bool silent) { silent_ = silent; }
 
   // Where camera (0, 1) is at now_s (the plant advanced to then).
-  PtzPose pose(int camera, double now_s);
+  PtzPose pose(int camera, double now_s) { return motors_.pose(camera, now_s); }
   int address(int camera) const { return cameras_[static_cast<size_t>(camera)].address; }
   // Every packet from the controller, in order.
   const std::vector<Bytes>& received() const { return received_; }
@@ -56,8 +56,7 @@ class ViscaChainEmulator {
   Bytes completion(size_t camera, int socket) const;
 
   ViscaModel model_;
-  PtzPlant plant_;
-  std::array<PtzPose, 2> targets_;
+  EmulatedMotors motors_;
   std::vector<Camera> cameras_;
   double completion_delay_s_ = 0;
   bool silent_ = false;
