@@ -1,5 +1,6 @@
-// ptz-driver: PTZ_SETPOINT -> the heads' motors -> PTZ_STATE, for real heads (here: VISCA over
-// IP; the simulator can pose as such cameras with --visca-port). Safety whatever arrives:
+// ptz-driver: PTZ_SETPOINT -> the heads' motors -> PTZ_STATE, for real heads (VISCA over IP or
+// serial, Pelco-D; the simulator can pose as VISCA-over-IP cameras with --visca-port), built by
+// backend in head_factory. Safety whatever arrives:
 // setpoints are clamped to the limits and slewed at most max_setpoint_rate, stale ones are
 // dropped, without a fresh one for deadman_s the heads hold where they are, and they stop on
 // exit (SIGINT/SIGTERM).

@@ -1,35 +1,125 @@
 #include "ptz_driver/head_factory.hpp"
 
+#include <stdexcept>
+
+#include "ptz/plant.hpp"
 #include "ptz_driver/gpio_factory.hpp"
+#include "ptz_driver/pelco_d_head.hpp"
 #include "ptz_driver/visca_ip_head.hpp"
+#include "ptz_driver/visca_serial_head.hpp"
 
 namespace ptz::driver {
 
 void declareBackendParams(Params& p) {
-  p.add("backend", "visca_ip", "visca_ip or gpio (serial VISCA and Pelco-D heads: not yet)");
+  p.add("backend", "visca_ip", "visca_ip, visca_serial, pelco_d or gpio");
   p.add("visca_model", "", "VISCA camera model file (config/visca/*.yaml); required for VISCA");
   p.add("left_host", "127.0.0.1", "left camera's IPv4 address");
   p.add("left_port", 52381, "", "left camera's VISCA-over-IP UDP port");
   p.add("right_host", "127.0.0.1", "right camera's IPv4 address");
   p.add("right_port", 52382, "", "right camera's VISCA-over-IP UDP port");
+  p.add("left_serial_device", "/dev/ttyUSB0", "left head's serial port (visca_serial, pelco_d)");
+  p.add("right_serial_device", "/dev/ttyUSB0",
+        "right head's serial port; the left's: both on one line (daisy chain, RS-485 bus)");
+  p.add("serial_baud", 9600, "baud", "serial VISCA baud rate (2400 .. 115200, the camera's)");
+  p.add("left_visca_address", 1, "", "left camera's VISCA address (1: first on the chain)");
+  p.add("right_visca_address", 0, "",
+        "right camera's VISCA address; 0: 2 on the left's line, 1 on a line of its own");
+  p.add("pelco_model", "", "Pelco-D head model file (config/pelco_d/*.yaml); required for pelco_d");
+  p.add("pelco_baud", 2400, "baud", "Pelco-D baud rate (the heads' DIP switches)");
+  p.add("left_pelco_address", 1, "", "left head's Pelco-D address (DIP switches)");
+  p.add("right_pelco_address", 2, "", "right head's Pelco-D address (DIP switches)");
+  p.add("pelco_position_query", false,
+        "the heads answer position queries 0x51/0x53/0x55 (else the position is estimated)");
   declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
 }
+
+namespace {
+
+std::string required(const Params& p, const std::string& name, const std::string& backend) {
+  const std::string v = p.getString(name);
+  if (v.empty()) throw ConfigError("parameter '" + name + "' is required with backend " + backend);
+  return v;
+}
+
+int address(const Params& p, const std::string& name, int lowest, int highest) {
+  const int a = p.getInt(name);
+  if (a < lowest || a > highest) {
+    throw ConfigError("parameter '" + name + "': address " + std::to_string(a) + " is not in " +
+                      std::to_string(lowest) + ".." + std::to_string(highest));
+  }
+  return a;
+}
+
+// The lines of the two heads: one shared when both name the same device.
+template <class Line>
+std::array<std::shared_ptr<Line>, 2> openLines(const Params& p, const std::string& baud) {
+  checkBaud(p.getInt(baud), baud);
+  std::array<std::shared_ptr<Line>, 2> lines;
+  const char* const names[2] = {"left_serial_device", "right_serial_device"};
+  for (size_t i = 0; i < 2; ++i) {
+    const std::string device = p.getString(names[i]);
+    if (i == 1 && device == p.getString(names[0])) {
+      lines[1] = lines[0];
+      break;
+    }
+    try {
+      lines[i] = std::make_shared<Line>(device, p.getInt(baud), baud);
+    } catch (const std::runtime_error& e) {
+      throw ConfigError("parameter '" + std::string(names[i]) + "': " + e.what());
+    }
+  }
+  return lines;
+}
+
+}  // namespace
 
 std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p) {
   const std::string backend = p.getString("backend");
   std::array<std::unique_ptr<PtzHead>, 2> heads;
   if (backend == "visca_ip") {
-    if (p.getString("visca_model").empty())
-      throw ConfigError("parameter 'visca_model' is required with backend visca_ip");
-    const ViscaModel model = ViscaModel::load(p.getString("visca_model"));
+    const ViscaModel model = ViscaModel::load(required(p, "visca_model", backend));
     heads[0] =
         std::make_unique<ViscaIpHead>(model, p.getString("left_host"), p.getInt("left_port"));
     heads[1] =
         std::make_unique<ViscaIpHead>(model, p.getString("right_host"), p.getInt("right_port"));
     return heads;
   }
+  if (backend == "visca_serial") {
+    const ViscaModel model = ViscaModel::load(required(p, "visca_model", backend));
+    const bool shared = p.getString("left_serial_device") == p.getString("right_serial_device");
+    const int left = address(p, "left_visca_address", 1, 7);
+    const int right = p.getInt("right_visca_address") == 0
+                          ? (shared ? 2 : 1)
+                          : address(p, "right_visca_address", 1, 7);
+    if (shared && left == right) {
+      throw ConfigError(
+          "parameters 'left_visca_address' and 'right_visca_address': two cameras "
+          "on one line need two addresses");
+    }
+    const auto lines = openLines<ViscaSerialLine>(p, "serial_baud");
+    heads[0] = std::make_unique<ViscaSerialHead>(model, lines[0], left);
+    heads[1] = std::make_unique<ViscaSerialHead>(model, lines[1], right);
+    return heads;
+  }
+  if (backend == "pelco_d") {
+    const PelcoModel model = PelcoModel::load(required(p, "pelco_model", backend));
+    const int left = address(p, "left_pelco_address", 1, 255);
+    const int right = address(p, "right_pelco_address", 1, 255);
+    if (p.getString("left_serial_device") == p.getString("right_serial_device") && left == right) {
+      throw ConfigError(
+          "parameters 'left_pelco_address' and 'right_pelco_address': two heads "
+          "on one bus need two addresses");
+    }
+    const auto lines = openLines<PelcoDLine>(p, "pelco_baud");
+    const bool query = p.getBool("pelco_position_query");
+    const PtzPlant::Params plant = plantParamsFrom(p);
+    heads[0] = std::make_unique<PelcoDHead>(model, lines[0], left, query, plant);
+    heads[1] = std::make_unique<PelcoDHead>(model, lines[1], right, query, plant);
+    return heads;
+  }
   if (backend == "gpio") return makeGpioHeads(p);
-  throw ConfigError("parameter 'backend': unknown backend '" + backend + "' (visca_ip, gpio)");
+  throw ConfigError("parameter 'backend': unknown backend '" + backend +
+                    "' (visca_ip, visca_serial, pelco_d, gpio)");
 }
 
 }  // namespace ptz::driver

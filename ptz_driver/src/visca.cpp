@@ -124,8 +124,8 @@ void ReplyParser::feed(const uint8_t* data, size_t size) {
     r.bytes = partial_;
     partial_.clear();
     const uint8_t h = r.bytes[0], k = r.bytes[1];
-    if (h == 0x88 && k == 0x30) {
-      r.kind = Reply::Kind::kAddress;  // the address-set broadcast coming back round the chain
+    if (h == 0x88 && (k == 0x30 || k == 0x01)) {  // a broadcast coming back round the chain
+      r.kind = k == 0x30 ? Reply::Kind::kAddress : Reply::Kind::kIfClear;
       ready_.push_back(std::move(r));
       continue;
     }

@@ -26,17 +26,7 @@ ViscaModel ViscaModel::load(const std::string& path) {
   m.tilt_max_rad = readDouble(root, "tilt_max_deg", where) * deg;
   m.pan_speed_max = readInt(root, "pan_speed_max", where);
   m.tilt_speed_max = readInt(root, "tilt_speed_max", where);
-  const cv::FileNode zp = readNode(root, "zoom_positions", where);
-  const cv::FileNode zr = readNode(root, "zoom_ratios", where);
-  for (const auto& n : zp) m.zoom_positions.push_back(static_cast<double>(n));
-  for (const auto& n : zr) m.zoom_ratios.push_back(static_cast<double>(n));
-  if (m.zoom_positions.size() < 2 || m.zoom_positions.size() != m.zoom_ratios.size() ||
-      !std::is_sorted(m.zoom_positions.begin(), m.zoom_positions.end()) ||
-      !std::is_sorted(m.zoom_ratios.begin(), m.zoom_ratios.end())) {
-    throw ConfigError(where +
-                      ": fields 'zoom_positions' and 'zoom_ratios' must be increasing "
-                      "lists of the same length (at least 2)");
-  }
+  m.zoom = ZoomTable::read(root, where);
   if (!(m.pan_units_per_rad > 0) || !(m.tilt_units_per_rad > 0) || m.pan_min_rad >= m.pan_max_rad ||
       m.tilt_min_rad >= m.tilt_max_rad) {
     throw ConfigError(where + ": units per degree must be > 0 and each min below its max");
@@ -52,26 +42,6 @@ int32_t ViscaModel::panUnits(double pan_rad) const {
 int32_t ViscaModel::tiltUnits(double tilt_rad) const {
   return static_cast<int32_t>(
       std::lround(std::clamp(tilt_rad, tilt_min_rad, tilt_max_rad) * tilt_units_per_rad));
-}
-
-namespace {
-// Piecewise-linear lookup in an increasing table.
-double interpolate(const std::vector<double>& from, const std::vector<double>& to, double x) {
-  if (x <= from.front()) return to.front();
-  if (x >= from.back()) return to.back();
-  const auto it = std::upper_bound(from.begin(), from.end(), x);
-  const size_t i = static_cast<size_t>(it - from.begin());
-  const double a = (x - from[i - 1]) / (from[i] - from[i - 1]);
-  return to[i - 1] + a * (to[i] - to[i - 1]);
-}
-}  // namespace
-
-int ViscaModel::zoomPosition(double ratio) const {
-  return static_cast<int>(std::lround(interpolate(zoom_ratios, zoom_positions, ratio)));
-}
-
-double ViscaModel::zoomRatio(int position) const {
-  return interpolate(zoom_positions, zoom_ratios, position);
 }
 
 Bytes ViscaCameraEmulator::reply(std::initializer_list<uint8_t> body) const {

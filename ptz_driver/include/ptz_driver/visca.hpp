@@ -42,7 +42,8 @@ enum ErrorCode : uint8_t {
 std::string errorName(int code);
 
 struct Reply {
-  enum class Kind { kAck, kCompletion, kError, kInquiry, kAddress, kOther };
+  // kAddress and kIfClear: the broadcasts Address Set and IF_Clear coming back round the chain.
+  enum class Kind { kAck, kCompletion, kError, kInquiry, kAddress, kIfClear, kOther };
   Kind kind = Kind::kOther;
   int address = 0;  // of the camera that answered (header (address + 8) << 4)
   int socket = 0;   // ACK, completion, error

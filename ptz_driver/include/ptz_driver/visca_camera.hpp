@@ -9,6 +9,7 @@
 
 #include "ptz/rig.hpp"  // PtzPose
 #include "ptz_driver/visca.hpp"
+#include "ptz_driver/zoom_table.hpp"
 
 namespace ptz::driver {
 
@@ -18,7 +19,7 @@ struct ViscaModel {
   double pan_units_per_rad = 0, tilt_units_per_rad = 0;
   double pan_min_rad = 0, pan_max_rad = 0, tilt_min_rad = 0, tilt_max_rad = 0;
   int pan_speed_max = 24, tilt_speed_max = 20;
-  std::vector<double> zoom_positions, zoom_ratios;  // increasing, same length
+  ZoomTable zoom;
 
   // Throws ConfigError naming the file and the field.
   static ViscaModel load(const std::string& path);
@@ -26,8 +27,8 @@ struct ViscaModel {
   int32_t tiltUnits(double tilt_rad) const;
   double panRad(int32_t units) const { return units / pan_units_per_rad; }
   double tiltRad(int32_t units) const { return units / tilt_units_per_rad; }
-  int zoomPosition(double ratio) const;  // clamped to the table
-  double zoomRatio(int position) const;
+  int zoomPosition(double ratio) const { return zoom.position(ratio); }
+  double zoomRatio(int position) const { return zoom.ratio(position); }
 };
 
 // Where a command told the camera to go.

@@ -1,0 +1,60 @@
+// One PTZ camera over serial VISCA (RS-232/RS-422), alone on its port or on a daisy chain that
+// shares one (replies routed by the address in their header). No sequence numbers: a command
+// gets an ACK (y0 4z FF, z its socket) then a completion (y0 5z FF) or an error (y0 6z EE FF);
+// an inquiry gets its answer directly; replies come in the order the requests went. So requests
+// wait in a FIFO for their ACK or answer, and ACKed commands by socket for their completion.
+// The camera takes one inquiry at a time (the zoom inquiry follows the pan-tilt answer) and has
+// two command sockets; at most one pan-tilt and one zoom command wait for an ACK, which paces
+// the commands to what the line and the camera take. The rest is ViscaHeadCore (shared with
+// VISCA over IP).
+#pragma once
+
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "ptz_driver/head.hpp"
+#include "ptz_driver/serial_line.hpp"
+#include "ptz_driver/visca_head_core.hpp"
+
+namespace ptz::driver {
+
+class ViscaSerialHead : public PtzHead {
+ public:
+  // The camera at `address` (1..7, as Address Set numbers the chain) on `line`.
+  ViscaSerialHead(ViscaModel model, std::shared_ptr<ViscaSerialLine> line, int address);
+
+  // Once per line: Address Set (88 30 01 FF) and IF_Clear (88 01 00 01 FF), broadcast.
+  void start(double now_s) override;
+  void command(const PtzPose& pose, double now_s) override;
+  // Sends the stops (whatever waits) until the camera acknowledges both, within timeout_s.
+  bool stop(double now_s, double timeout_s) override;
+  // Forgets requests unanswered for timeout_s (counted; a command goes again), then asks.
+  void inquire(double now_s, double timeout_s) override;
+  void receive(double now_s) override;
+
+  std::optional<PtzPose> measured() const override { return core_.measured(); }
+  double measuredAtS() const override { return core_.measuredAtS(); }
+  int fd() const override { return line_->fd(); }
+  HeadStats& stats() override { return core_.stats(); }
+
+ private:
+  using Request = ViscaHeadCore::Request;
+  struct Pending {
+    Request what;
+    double sent_s;
+  };
+  ViscaHeadCore::Send sender(double now_s, bool paced);
+  void handle(const visca::Reply& r, double now_s);
+  void onBroadcast(const visca::Reply& r);
+  // The first request waiting in the FIFO that `fits`; those before it were lost on the way.
+  std::optional<Pending> takeFirst(bool (*fits)(Request));
+
+  ViscaHeadCore core_;
+  std::shared_ptr<ViscaSerialLine> line_;
+  std::deque<Pending> awaiting_;    // sent, in order: awaiting an ACK or an answer
+  std::map<int, Pending> sockets_;  // ACKed commands by socket: awaiting their completion
+};
+
+}  // namespace ptz::driver

@@ -1,0 +1,74 @@
+#include "ptz_driver/pelco_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ptz/config.hpp"
+
+namespace ptz::driver {
+namespace {
+constexpr double kDeg = M_PI / 180;
+constexpr int kTurn = 36000;  // hundredths of a degree
+
+int toHead(double rad, double min_rad, double max_rad, int zero, int direction) {
+  const long v = zero + direction * std::lround(std::clamp(rad, min_rad, max_rad) / kDeg * 100);
+  return static_cast<int>(((v % kTurn) + kTurn) % kTurn);
+}
+
+double fromHead(int centideg, int zero, int direction) {
+  int d = ((direction * (centideg - zero)) % kTurn + kTurn) % kTurn;  // 0..35999
+  if (d > kTurn / 2) d -= kTurn;
+  return d / 100.0 * kDeg;
+}
+
+int readDirection(const cv::FileNode& root, const std::string& field, const std::string& where) {
+  const int d = readInt(root, field, where);
+  if (d != 1 && d != -1) throw ConfigError(where + ": field '" + field + "' must be 1 or -1");
+  return d;
+}
+}  // namespace
+
+PelcoModel PelcoModel::load(const std::string& path) {
+  const std::string where = "Pelco-D model file '" + path + "'";
+  cv::FileStorage fs = openForRead(path, "Pelco-D model file");
+  const cv::FileNode root = fs.root();
+  PelcoModel m;
+  m.name = readString(root, "name", where);
+  m.pan_zero_centideg = readInt(root, "pan_zero_centideg", where);
+  m.tilt_zero_centideg = readInt(root, "tilt_zero_centideg", where);
+  m.pan_direction = readDirection(root, "pan_direction", where);
+  m.tilt_direction = readDirection(root, "tilt_direction", where);
+  m.pan_min_rad = readDouble(root, "pan_min_deg", where) * kDeg;
+  m.pan_max_rad = readDouble(root, "pan_max_deg", where) * kDeg;
+  m.tilt_min_rad = readDouble(root, "tilt_min_deg", where) * kDeg;
+  m.tilt_max_rad = readDouble(root, "tilt_max_deg", where) * kDeg;
+  m.zoom = ZoomTable::read(root, where);
+  if (m.pan_zero_centideg < 0 || m.pan_zero_centideg >= kTurn || m.tilt_zero_centideg < 0 ||
+      m.tilt_zero_centideg >= kTurn) {
+    throw ConfigError(where +
+                      ": fields 'pan_zero_centideg' and 'tilt_zero_centideg' must be in "
+                      "0..35999");
+  }
+  // Both ends within half a turn of zero, or the angle read back is ambiguous.
+  if (!(m.pan_min_rad < m.pan_max_rad) || !(m.tilt_min_rad < m.tilt_max_rad) ||
+      m.pan_min_rad <= -M_PI || m.pan_max_rad > M_PI || m.tilt_min_rad <= -M_PI ||
+      m.tilt_max_rad > M_PI) {
+    throw ConfigError(where + ": each min below its max, all within (-180, 180] degrees");
+  }
+  return m;
+}
+
+int PelcoModel::panCentideg(double pan_rad) const {
+  return toHead(pan_rad, pan_min_rad, pan_max_rad, pan_zero_centideg, pan_direction);
+}
+int PelcoModel::tiltCentideg(double tilt_rad) const {
+  return toHead(tilt_rad, tilt_min_rad, tilt_max_rad, tilt_zero_centideg, tilt_direction);
+}
+double PelcoModel::panRad(int centideg) const {
+  return fromHead(centideg, pan_zero_centideg, pan_direction);
+}
+double PelcoModel::tiltRad(int centideg) const {
+  return fromHead(centideg, tilt_zero_centideg, tilt_direction);
+}
+
+}  // namespace ptz::driver

@@ -1,0 +1,242 @@
+// Pelco-D heads against the head emulator through a pseudo-terminal: the model's mapping of
+// angles, the frames and checksums on the wire, position queries one at a time on a shared
+// half-duplex bus, the estimate of heads that cannot say where they are (the shared plant
+// model), garbage and the stop. Time is the test's (seconds from 0).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+
+#include "ptz/config.hpp"
+#include "ptz/plant.hpp"
+#include "ptz_driver/pelco_d_emulator.hpp"
+#include "ptz_driver/pelco_d_head.hpp"
+#include "support/pty_pair.hpp"
+
+using namespace ptz::driver;
+using ptz::test::PtyPair;
+
+namespace {
+const std::string kGeneric = PTZ_SOURCE_DIR "/config/pelco_d/generic.yaml";
+constexpr double kDeg = M_PI / 180;
+constexpr double kT = 0.24;  // the plant's time constant (defaultPlantParams)
+constexpr double kCentideg = kDeg / 100;
+
+class PelcoSerial : public ::testing::Test {
+ protected:
+  PelcoModel model = PelcoModel::load(kGeneric);
+  PtyPair pty;
+  std::shared_ptr<PelcoDLine> line = std::make_shared<PelcoDLine>(pty.path(), 2400, "pelco_baud");
+  ptz::PtzPlant::Params plant = ptz::defaultPlantParams();
+
+  // Reads until `count` whole frames came from the heads.
+  std::vector<Bytes> frames(size_t count) {
+    const Bytes b = pty.readUntil([count](const Bytes& all) { return all.size() >= 7 * count; });
+    std::vector<Bytes> out;
+    for (size_t i = 0; i + 7 <= b.size(); i += 7)
+      out.emplace_back(b.begin() + i, b.begin() + i + 7);
+    return out;
+  }
+  // The emulated heads take `count` frames and answer at now_s.
+  std::vector<Bytes> serve(PelcoDBusEmulator& bus, size_t count, double now_s) {
+    auto in = frames(count);
+    EXPECT_EQ(in.size(), count);
+    for (const Bytes& f : in) pty.write(bus.feed(f.data(), f.size(), now_s));
+    return in;
+  }
+  bool read(PtzHead& h, double now_s, const std::function<bool()>& done) {
+    return waitUntil(
+        h.fd(), 2.0, [&] { h.receive(now_s); }, done);
+  }
+  // One round of queries (pan, tilt, zoom, one at a time) answered at now_s.
+  void measure(PelcoDHead& h, PelcoDBusEmulator& bus, double now_s) {
+    const int64_t before = h.stats().replies;
+    h.inquire(now_s, 0.5);
+    for (int i = 1; i <= 3; ++i) {
+      serve(bus, 1, now_s);
+      ASSERT_TRUE(read(h, now_s, [&] { return h.stats().replies == before + i; }));
+    }
+  }
+};
+
+std::string errorOf(const std::string& path) {
+  try {
+    PelcoModel::load(path);
+  } catch (const ptz::ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(PelcoModel, MapsTheProjectsAnglesOntoHundredthsOfADegree) {
+  const PelcoModel m = PelcoModel::load(kGeneric);
+  EXPECT_EQ(m.panCentideg(0), 0);
+  EXPECT_EQ(m.panCentideg(90 * kDeg), 9000);
+  EXPECT_EQ(m.panCentideg(-90 * kDeg), 27000);
+  EXPECT_EQ(m.panCentideg(-200 * kDeg), 36000 - 17000);  // clamped to -170 deg
+  EXPECT_EQ(m.tiltCentideg(10 * kDeg), 35000);           // up: the head counts downwards
+  EXPECT_EQ(m.tiltCentideg(-30 * kDeg), 3000);
+  EXPECT_EQ(m.tiltCentideg(-45 * kDeg), 3000);  // clamped to -30 deg
+  EXPECT_NEAR(m.panRad(27000), -90 * kDeg, 1e-12);
+  EXPECT_NEAR(m.panRad(18000), 180 * kDeg, 1e-12);
+  EXPECT_NEAR(m.tiltRad(35000), 10 * kDeg, 1e-12);
+  EXPECT_EQ(m.zoom.position(1.0), 0);
+  EXPECT_EQ(m.zoom.position(10.0), 65535);
+  EXPECT_EQ(m.zoom.position(5.5), 32768);  // 65535 / 2 rounded
+  const std::string bad = ::testing::TempDir() + "pelco_bad.yaml";
+  {
+    std::ifstream in(kGeneric);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("pan_direction: 1"), 16, "pan_direction: 2");
+    std::ofstream(bad) << text;
+  }
+  EXPECT_EQ(errorOf(bad),
+            "Pelco-D model file '" + bad + "': field 'pan_direction' must be 1 or -1");
+  EXPECT_NE(errorOf("/nonexistent/pelco.yaml").find("/nonexistent/pelco.yaml"), std::string::npos);
+}
+
+TEST_F(PelcoSerial, CommandsAreTheFramesWithTheirChecksums) {
+  PelcoDHead head(model, line, 1, true, plant);
+  head.command({90 * kDeg, 10 * kDeg, 5.5}, 0);
+  const auto sent = frames(3);
+  ASSERT_EQ(sent.size(), 3u);
+  EXPECT_EQ(sent[0], (Bytes{0xFF, 0x01, 0x00, 0x4B, 0x23, 0x28, 0x97}));  // 9000
+  EXPECT_EQ(sent[1], (Bytes{0xFF, 0x01, 0x00, 0x4D, 0x88, 0xB8, 0x8E}));  // 35000
+  EXPECT_EQ(sent[2], (Bytes{0xFF, 0x01, 0x00, 0x4F, 0x80, 0x00, 0xD0}));  // 32768
+  head.command({90 * kDeg, 10 * kDeg, 5.5}, 0.1);                         // unchanged: nothing
+  head.command({90 * kDeg, 11 * kDeg, 5.5}, 0.2);                         // only the tilt
+  EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::setTiltPosition(1, 34900)});
+  EXPECT_EQ(head.stats().sent, 4);
+  EXPECT_TRUE(head.stop(0.3, 1.0));
+  EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::stop(1)});
+  EXPECT_EQ(pelco_d::stop(1), (Bytes{0xFF, 0x01, 0x00, 0x00, 0x00, 0x00, 0x01}));
+}
+
+TEST_F(PelcoSerial, WithPositionQueriesTheMeasuredPoseFollowsTheMotors) {
+  PelcoDBusEmulator bus(model, plant, {1}, true);
+  PelcoDHead head(model, line, 1, true, plant);
+  EXPECT_TRUE(head.measuresPosition());
+  head.start(0);
+  head.inquire(0, 0.5);
+  EXPECT_EQ(serve(bus, 1, 0)[0], (Bytes{0xFF, 0x01, 0x00, 0x51, 0x00, 0x00, 0x52}));
+  ASSERT_TRUE(read(head, 0, [&] { return head.stats().replies == 1; }));
+  head.inquire(0, 0.5);  // one query at a time: the tilt query now, then the zoom query
+  EXPECT_EQ(serve(bus, 1, 0)[0], (Bytes{0xFF, 0x01, 0x00, 0x53, 0x00, 0x00, 0x54}));
+  ASSERT_TRUE(read(head, 0, [&] { return head.stats().replies == 2; }));
+  EXPECT_EQ(serve(bus, 1, 0)[0], (Bytes{0xFF, 0x01, 0x00, 0x55, 0x00, 0x00, 0x56}));
+  ASSERT_TRUE(read(head, 0, [&] { return head.stats().replies == 3; }));
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measured()->pan_rad, 0.0);
+  EXPECT_EQ(head.measured()->zoom, 1.0);
+  head.command({0.5, 0.2, 4.0}, 0);
+  serve(bus, 3, 0);
+  const double pan = model.panRad(model.panCentideg(0.5));
+  const double tilt = model.tiltRad(model.tiltCentideg(0.2));
+  const double zoom = model.zoom.ratio(model.zoom.position(4.0));
+  for (const double t : {0.1, kT, 2.0}) {
+    measure(head, bus, t);
+    const double a = 1 - std::exp(-t / kT);
+    EXPECT_NEAR(head.measured()->pan_rad, pan * a, kCentideg) << "t " << t;
+    EXPECT_NEAR(head.measured()->tilt_rad, tilt * a, kCentideg) << "t " << t;
+    EXPECT_NEAR(head.measured()->zoom, 1 + (zoom - 1) * a, 1e-3) << "t " << t;
+    EXPECT_EQ(head.measuredAtS(), t);
+  }
+  EXPECT_EQ(head.stats().malformed + head.stats().timeouts, 0);
+}
+
+TEST_F(PelcoSerial, WithoutQueriesThePoseIsTheEstimateOfThePlantModel) {
+  PelcoDBusEmulator bus(model, plant, {1}, false);
+  PelcoDHead head(model, line, 1, false, plant);
+  EXPECT_FALSE(head.measuresPosition());
+  head.start(0);  // home: pan 0, tilt 0, zoom 1
+  const auto home = serve(bus, 3, 0);
+  EXPECT_EQ(home[0], (Bytes{0xFF, 0x01, 0x00, 0x4B, 0x00, 0x00, 0x4C}));
+  EXPECT_EQ(home[1], (Bytes{0xFF, 0x01, 0x00, 0x4D, 0x00, 0x00, 0x4E}));
+  EXPECT_EQ(home[2], (Bytes{0xFF, 0x01, 0x00, 0x4F, 0x00, 0x00, 0x50}));
+  // The longest move home: 340 deg of pan at 300 deg/s, then 5 T: 1.133 + 1.2 = 2.333 s.
+  head.inquire(2.3, 0.1);
+  EXPECT_FALSE(head.measured()) << "still homing";
+  head.inquire(2.34, 0.1);
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measured()->pan_rad, 0.0);
+  head.command({0.5, 0.2, 4.0}, 3.0);
+  serve(bus, 3, 3.0);
+  const double pan = model.panRad(model.panCentideg(0.5));
+  for (const double t : {3.1, 3.0 + kT, 5.0}) {
+    head.inquire(t, 0.1);
+    const double a = 1 - std::exp(-(t - 3.0) / kT);
+    EXPECT_NEAR(head.measured()->pan_rad, pan * a, 1e-9) << "t " << t;
+    EXPECT_EQ(head.measuredAtS(), t);
+    // The emulated head, moved by the same plant model, is where the estimate says.
+    EXPECT_NEAR(head.measured()->pan_rad, bus.pose(0, t).pan_rad, 1e-9);
+    EXPECT_NEAR(head.measured()->tilt_rad, bus.pose(0, t).tilt_rad, 1e-9);
+    EXPECT_NEAR(head.measured()->zoom, bus.pose(0, t).zoom, 1e-9);
+  }
+  // Stopped on the way to -0.5 rad: the estimate holds where it has got to.
+  head.command({-0.5, 0.2, 4.0}, 6.0);
+  serve(bus, 1, 6.0);
+  head.inquire(6.1, 0.1);
+  const double at_stop = head.measured()->pan_rad;
+  const double at_6 = pan * (1 - std::exp(-3.0 / kT));  // 3 s after the move to `pan`
+  const double to = model.panRad(model.panCentideg(-0.5));
+  EXPECT_NEAR(at_stop, at_6 + (to - at_6) * (1 - std::exp(-0.1 / kT)), 1e-9);
+  EXPECT_TRUE(head.stop(6.1, 1.0));
+  head.inquire(7.0, 0.1);
+  EXPECT_NEAR(head.measured()->pan_rad, at_stop, 1e-9);
+}
+
+TEST_F(PelcoSerial, TwoHeadsOnOneBusTakeTurnsAndGetTheirOwnAnswers) {
+  PelcoDBusEmulator bus(model, plant, {1, 2}, true, {0.3, 0.0, 1.0});
+  PelcoDHead left(model, line, 1, true, plant), right(model, line, 2, true, plant);
+  left.inquire(0, 0.5);
+  right.inquire(0, 0.5);  // the left head's answer is awaited: the bus is not free
+  EXPECT_EQ(right.stats().sent, 0);
+  EXPECT_EQ(serve(bus, 1, 0)[0][1], 0x01);
+  ASSERT_TRUE(read(left, 0, [&] { return left.stats().replies == 1; }));
+  // The left head's tilt query waits: the right head wants the bus and the left talked last.
+  left.inquire(0, 0.5);
+  right.inquire(0, 0.5);
+  EXPECT_EQ(left.stats().sent, 1);
+  EXPECT_EQ(serve(bus, 1, 0)[0][1], 0x02);
+  ASSERT_TRUE(read(right, 0, [&] { return right.stats().replies == 1; }));
+  EXPECT_FALSE(left.measured());  // tilt and zoom not yet known
+  for (int i = 0; i < 4; ++i) {   // the rest of both rounds, taking turns
+    left.inquire(0, 0.5);
+    right.inquire(0, 0.5);
+    serve(bus, 1, 0);
+    ASSERT_TRUE(waitUntil(
+        line->fd(), 2.0,
+        [&] {
+          left.receive(0);
+          right.receive(0);
+        },
+        [&] { return left.stats().replies + right.stats().replies == 3 + i; }));
+  }
+  ASSERT_TRUE(left.measured() && right.measured());
+  EXPECT_NEAR(left.measured()->pan_rad, 0.3, kCentideg);
+  EXPECT_NEAR(right.measured()->pan_rad, 0.3, kCentideg);
+  EXPECT_EQ(left.stats().malformed + right.stats().malformed, 0);
+}
+
+TEST_F(PelcoSerial, GarbageAndASilentHeadAreCounted) {
+  PelcoDBusEmulator bus(model, plant, {1}, true);
+  PelcoDHead head(model, line, 1, true, plant);
+  head.inquire(0, 0.1);
+  const auto query = frames(1);
+  // Two stray bytes, a frame with a bad checksum, a reply from address 9, then the answer.
+  pty.write({0x13, 0x37});
+  pty.write({0xFF, 0x01, 0x00, 0x59, 0x00, 0x10, 0x00});
+  pty.write(pelco_d::frame(9, 0, 0x59, 0, 0));
+  pty.write(bus.feed(query[0].data(), query[0].size(), 0));
+  ASSERT_TRUE(read(head, 0, [&] { return head.stats().replies == 1; }));
+  // 2 skipped + 1 bad checksum and its 7 bytes dropped (no sync byte inside) + 1 not ours.
+  EXPECT_EQ(head.stats().malformed, 2 + 1 + 7 + 1);
+  // Silence: the tilt query times out, is counted, and the round starts over with pan.
+  head.inquire(0.05, 0.1);
+  EXPECT_EQ(frames(1)[0][3], 0x53);
+  head.inquire(0.2, 0.1);
+  EXPECT_EQ(head.stats().timeouts, 1);
+  EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::queryPan(1)});
+}

@@ -1,0 +1,112 @@
+// Serial VISCA heads when things go wrong: camera errors by name, a silent camera, lost
+// replies, an unplugged adapter, garbage on the line, "command buffer full".
+#include <gtest/gtest.h>
+
+#include "support/visca_serial_fixture.hpp"
+
+using namespace ptz::driver;
+using ptz::test::ViscaSerial;
+
+TEST_F(ViscaSerial, ErrorsAreCountedByNameAndARefusedCommandGoesAgain) {
+  left.command({0.5, 0.2, 4.0}, 0);
+  const auto sent = ptz::test::readViscaPackets(pty, 2);
+  pty.write({0x90, 0x60, 0x02, 0xFF});  // the pan-tilt command: syntax error
+  ASSERT_TRUE(read(0, [&] { return left.stats().errors == 1; }));
+  EXPECT_EQ(left.stats().last_error, "syntax error");
+  pty.write({0x90, 0x41, 0xFF, 0x90, 0x61, 0x41, 0xFF});  // zoom: ACK, then not executable
+  ASSERT_TRUE(read(0, [&] { return left.stats().errors == 2; }));
+  EXPECT_EQ(left.stats().last_error, "command not executable");
+  left.command({0.5, 0.2, 4.0}, 0.01);
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 2), sent);  // both again, the same bytes
+  EXPECT_EQ(left.stats().malformed, 0);
+}
+
+TEST_F(ViscaSerial, ASilentCameraGivesTimeoutsAndResends) {
+  const Bytes inquiry = {0x81, 0x09, 0x06, 0x12, 0xFF};
+  left.inquire(0, 0.1);
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 1), std::vector<Bytes>{inquiry});
+  left.inquire(0.05, 0.1);  // not yet timed out: nothing more
+  EXPECT_EQ(left.stats().sent, 1);
+  left.inquire(0.15, 0.1);
+  EXPECT_EQ(left.stats().timeouts, 1);
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 1), std::vector<Bytes>{inquiry});
+  left.command({0.5, 0.2, 4.0}, 0.15);
+  const auto commands = ptz::test::readViscaPackets(pty, 2);
+  left.command({0.6, 0.2, 4.0}, 0.2);  // the pan-tilt command still awaits its ACK: waits
+  EXPECT_EQ(left.stats().sent, 4);
+  // At 0.3 s the inquiry (one round) and both commands are lost: counted, and asked again.
+  left.inquire(0.3, 0.1);
+  EXPECT_EQ(left.stats().timeouts, 1 + 1 + 2);
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 1), std::vector<Bytes>{inquiry});
+  left.command({0.5, 0.2, 4.0}, 0.3);
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 2), commands);
+  EXPECT_FALSE(left.measured());
+}
+
+TEST_F(ViscaSerial, AReplyThatSkipsARequestMeansThatRequestsReplyWasLost) {
+  left.inquire(0, 0.1);
+  left.command({0.5, 0.2, 4.0}, 0);
+  ASSERT_EQ(ptz::test::readViscaPackets(pty, 3).size(), 3u);  // inquiry, pan-tilt, zoom
+  pty.write({0x90, 0x41, 0xFF});  // the pan-tilt command's ACK: the inquiry's answer is lost
+  ASSERT_TRUE(read(0, [&] { return left.stats().timeouts == 1; }));
+  left.inquire(0.01, 0.1);  // asked again at once, not after the timeout
+  EXPECT_EQ(ptz::test::readViscaPackets(pty, 1),
+            std::vector<Bytes>{visca::panTiltPositionInquiry(1)});
+  EXPECT_EQ(left.stats().malformed, 0);
+}
+
+TEST_F(ViscaSerial, AnUnpluggedAdapterIsOneNamedErrorAndTheProcessGoesOn) {
+  const int fd = line->fd();
+  pty.hangUp();
+  left.receive(0);
+  right.receive(0);
+  left.receive(0.1);
+  EXPECT_EQ(left.stats().errors, 1);
+  EXPECT_EQ(left.stats().last_error,
+            "serial device '" + pty.path() + "' hung up (adapter unplugged?)");
+  EXPECT_EQ(right.stats().errors, 0) << "one line, one error";
+  EXPECT_EQ(left.fd(), -1) << "no longer polled (was " << fd << ")";
+  left.inquire(0.2, 0.1);  // writes fail quietly: nothing measured, nothing thrown
+  EXPECT_FALSE(left.measured());
+}
+
+TEST_F(ViscaSerial, GarbageIsCountedAndSkipped) {
+  startChain();
+  const int64_t before = replies();
+  left.inquire(0, 0.1);
+  const auto in = ptz::test::readViscaPackets(pty, 1);
+  // Five bytes the parser cannot use (no header byte, a lone terminator), then the answer.
+  pty.write({0x00, 0x13, 0x37, 0xFF, 0x42});
+  pty.write(chain.feed(in[0].data(), in[0].size(), 0));
+  ASSERT_TRUE(read(0, [&] { return replies() == before + 1; }));
+  EXPECT_EQ(left.stats().malformed + right.stats().malformed, 5);
+  // An answer nobody asked for (no inquiry out now) is counted too, and skipped.
+  serve(1, 0);  // the zoom inquiry
+  ASSERT_TRUE(read(0, [&] { return replies() == before + 2; }));
+  pty.write({0x90, 0x50, 0x00, 0x00, 0x00, 0x00, 0xFF});
+  ASSERT_TRUE(read(0, [&] { return left.stats().malformed + right.stats().malformed == 6; }));
+  EXPECT_TRUE(left.measured());
+}
+
+TEST_F(ViscaSerial, ACommandBufferFullMakesTheHeadWaitForACompletion) {
+  startChain();
+  chain.setCompletionDelay(-1);  // commands run until the test completes them
+  const int64_t before = replies();
+  left.command({0.5, 0.2, 4.0}, 0);
+  serve(2, 0);  // ACK on sockets 1 and 2
+  ASSERT_TRUE(read(0, [&] { return replies() == before + 2; }));
+  left.command({0.6, 0.2, 4.0}, 0.02);
+  serve(1, 0.02);  // both sockets busy: 90 60 03 FF
+  ASSERT_TRUE(read(0.02, [&] { return left.stats().buffer_full == 1; }));
+  EXPECT_EQ(left.stats().last_error, "command buffer full");
+  const int64_t sent = left.stats().sent;
+  left.command({0.7, 0.2, 4.0}, 0.04);
+  EXPECT_EQ(left.stats().sent, sent) << "waits for a completion";
+  pty.write(chain.releaseCompletion(0));  // 90 51 FF: socket 1 free
+  ASSERT_TRUE(read(0.06, [&] { return replies() == before + 2 + 1 + 1; }));
+  left.command({0.7, 0.2, 4.0}, 0.06);
+  const auto again = ptz::test::readViscaPackets(pty, 2);  // the refusal sent everything again
+  ASSERT_EQ(again.size(), 2u);
+  EXPECT_EQ(again[0], visca::panTiltAbsolute(1, 24, 20, model.panUnits(0.7), 153, 4));
+  EXPECT_EQ(again[1], visca::zoomDirect(1, 10336));
+}
