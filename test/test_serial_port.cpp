@@ -94,9 +94,10 @@ TEST(SerialBackends, ParametersAreCheckedByName) {
   p.set("pelco_model", kConfig + "pelco_d/generic.yaml");
   p.set("right_pelco_address", "1");
   EXPECT_NE(errorOf([&] { ptz::driver::makeHeads(p); }).find("two addresses"), std::string::npos);
-  p.set("backend", "gpio");
-  EXPECT_NE(errorOf([&] { ptz::driver::makeHeads(p); }).find("unknown backend 'gpio'"),
-            std::string::npos);
+  p.set("backend", "stepper");
+  EXPECT_EQ(
+      errorOf([&] { ptz::driver::makeHeads(p); }),
+      "parameter 'backend': unknown backend 'stepper' (visca_ip, visca_serial, pelco_d, gpio)");
 }
 
 // right_visca_address 0: 2 on the left's line (a daisy chain), 1 on a line of its own.
