@@ -89,6 +89,98 @@ TEST(CameraNode, EachImageCarriesThePtzOfItsOwnCaptureTime) {
   EXPECT_EQ(h, Health::kWarn);
 }
 
+TEST(CameraNode, PairsWaitForTheStatesThatArriveAfterThemAndAreInterpolated) {
+  CameraConfig c = config(0);
+  c.source[0] = parseSource("0", "left_source");  // live cameras: capture times are wall clock
+  c.source[1] = parseSource("1", "right_source");
+  Rig rig(c);
+  // States every 20 ms, each arriving 30 ms after its time (mid round trip, 50 Hz, LCM); frames
+  // at 25 Hz (right 7 ms after left), each arriving 5 ms after its capture. Explicit time in
+  // 5 ms steps; the states start before the first frame.
+  constexpr int64_t kStateDelay = 30'000, kFrameDelay = 5'000;
+  int64_t next_state = kStart - 100'000;
+  int next_frame = 0;
+  std::vector<std::pair<StampedPair, int64_t>> published;  // with the time it was released
+  for (int64_t now = kStart - 100'000; now <= kStart + 1'000'000; now += 5'000) {
+    for (; next_state + kStateDelay <= now; next_state += 20'000) {
+      ASSERT_TRUE(rig.camera.onPtzState(next_state, truth(ptz::Side::kLeft, next_state),
+                                        truth(ptz::Side::kRight, next_state)));
+    }
+    for (; next_frame < 20 && kStart + next_frame * 40'000 + 10'000 + kFrameDelay <= now;
+         ++next_frame) {
+      rig.left->push(kStart + next_frame * 40'000 + 3'000, next_frame);
+      rig.right->push(kStart + next_frame * 40'000 + 10'000, next_frame);
+    }
+    for (auto& p : rig.camera.step(now)) published.emplace_back(std::move(p), now);
+  }
+  ASSERT_EQ(published.size(), 20u);
+  for (const auto& [p, released] : published) {
+    EXPECT_EQ(p.left.index, p.right.index);
+    EXPECT_FALSE(p.ptz_stale);
+    const auto l = truth(ptz::Side::kLeft, p.left.capture_utime);
+    const auto r = truth(ptz::Side::kRight, p.right.capture_utime);
+    EXPECT_NEAR(p.left_pose.pan_rad, l.pan_rad, 1e-12) << "pair " << p.left.index;
+    EXPECT_NEAR(p.left_pose.tilt_rad, l.tilt_rad, 1e-12);
+    EXPECT_NEAR(p.left_pose.zoom, l.zoom, 1e-12);
+    EXPECT_NEAR(p.right_pose.pan_rad, r.pan_rad, 1e-12) << "pair " << p.left.index;
+    EXPECT_NEAR(p.right_pose.tilt_rad, r.tilt_rad, 1e-12);
+    EXPECT_NEAR(p.right_pose.zoom, r.zoom, 1e-12);
+    // Released by the first state at or after the right capture: at most a state period and
+    // the state's delay after it (the pair was made on the right frame's arrival).
+    EXPECT_EQ(p.ptz_wait_us, released - (p.right.capture_utime + kFrameDelay));
+    EXPECT_GT(p.ptz_wait_us, 0);
+    EXPECT_LE(released, p.right.capture_utime + 20'000 + kStateDelay);
+  }
+  EXPECT_EQ(rig.camera.counters().at("ptz_stale"), 0);
+  EXPECT_EQ(rig.camera.counters().at("ptz_extrapolated"), 0);
+  EXPECT_FALSE(rig.camera.heldUntilUtime().has_value());
+}
+
+TEST(CameraNode, WithoutAStateToWaitForPairsAreNotDelayed) {
+  CameraConfig c = config(0);
+  c.source[0] = parseSource("0", "left_source");
+  c.source[1] = parseSource("1", "right_source");
+  Rig rig(c);
+  // No PTZ_STATE ever (no driver): published at once, stale.
+  for (int k = 0; k < 5; ++k) {
+    rig.left->push(kStart + k * 40'000, k);
+    rig.right->push(kStart + k * 40'000 + 1'000, k);
+  }
+  const auto none = rig.camera.step(kStart + 161'000);
+  ASSERT_EQ(none.size(), 5u);
+  for (const auto& p : none) {
+    EXPECT_TRUE(p.ptz_stale);
+    EXPECT_EQ(p.ptz_wait_us, 0);
+  }
+  EXPECT_FALSE(rig.camera.heldUntilUtime().has_value());
+  // A driver whose last state is older than max_ptz_extrapolation_s (0.1 s): stale whatever
+  // arrives, published at once.
+  ASSERT_TRUE(rig.camera.onPtzState(kStart, truth(ptz::Side::kLeft, kStart),
+                                    truth(ptz::Side::kRight, kStart)));
+  rig.left->push(kStart + 200'000, 5);
+  rig.right->push(kStart + 201'000, 5);
+  const auto gone = rig.camera.step(kStart + 202'000);
+  ASSERT_EQ(gone.size(), 1u);
+  EXPECT_TRUE(gone[0].ptz_stale);
+  EXPECT_EQ(gone[0].ptz_wait_us, 0);
+  // States that stop for a moment: the pair waits max_ptz_extrapolation_s after its (later)
+  // capture, then takes the newest state, not stale.
+  ASSERT_TRUE(rig.camera.onPtzState(kStart + 230'000, truth(ptz::Side::kLeft, kStart + 230'000),
+                                    truth(ptz::Side::kRight, kStart + 230'000)));
+  rig.left->push(kStart + 240'000, 6);
+  rig.right->push(kStart + 241'000, 6);
+  EXPECT_TRUE(rig.camera.step(kStart + 250'000).empty());
+  ASSERT_TRUE(rig.camera.heldUntilUtime().has_value());
+  EXPECT_EQ(*rig.camera.heldUntilUtime(), kStart + 341'000);
+  EXPECT_TRUE(rig.camera.step(kStart + 340'999).empty());
+  const auto late = rig.camera.step(kStart + 341'000);
+  ASSERT_EQ(late.size(), 1u);
+  EXPECT_FALSE(late[0].ptz_stale);
+  EXPECT_EQ(late[0].ptz_wait_us, 91'000);
+  EXPECT_NEAR(late[0].left_pose.pan_rad, truth(ptz::Side::kLeft, kStart + 230'000).pan_rad, 1e-12);
+  EXPECT_EQ(rig.camera.counters().at("ptz_extrapolated"), 2);  // this one and the stale one
+}
+
 TEST(CameraNode, ARecordingWaitsForItsPartnerInsteadOfOverflowingAndALiveCameraCannot) {
   CameraConfig c = config(0);
   c.pairer.buffer_frames = 10;

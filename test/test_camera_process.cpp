@@ -2,7 +2,7 @@
 // (MJPG in .avi, with timestamps files), each frame's number drawn into its corner as big blocks:
 // the right stream 8 ms late (tolerance 12 ms) with known frames dropped on both sides, stamped
 // from PTZ_STATE messages the test publishes; then 18 ms late, where nothing may pair and the
-// status must say so.
+// status must say so; and a reader blocked in its driver at exit.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -12,6 +12,8 @@
 #include <array>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 
@@ -216,4 +218,37 @@ TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
   EXPECT_EQ(l.counters["unmatched_left"], kFrames);
   EXPECT_EQ(l.counters["unmatched_right"], kFrames);
   std::printf("no-pair ERROR %.2f s after start: %s\n", after_s, l.message.c_str());
+}
+
+TEST(CameraProcess, AReaderStillBlockedInItsDriverAtExitIsReportedAndSkipsTheStaticDestructors) {
+  // The right source is a GStreamer pipeline reading a FIFO nobody writes: its reader blocks
+  // in open(2) for good, as one does in a stalled RTSP stream. ptz-camera is stopped while that
+  // connection is still current (open_timeout_s far away), so the reader is only abandoned when
+  // the sources are closed at exit; the check must come after that.
+  TempDir dir;
+  const std::string fifo = dir.path + "/stalled.fifo", log = dir.path + "/camera.err";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  CameraListener l;
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
+  // Through sh only to catch its stderr; exec keeps the pid, so SIGTERM reaches ptz-camera.
+  ChildProcess camera({"/bin/sh", "-c", "log=$1; shift; exec \"$@\" 2>\"$log\"", "sh", log,
+                       PTZ_CAMERA_BIN, "--lcm-url", ptz::test::kTestUrl, "--left-source",
+                       "videotestsrc is-live=true ! video/x-raw,width=64,height=48,framerate=25/1 "
+                       "! videoconvert ! appsink",
+                       "--right-source",
+                       "filesrc location=" + fifo + " ! decodebin ! videoconvert ! appsink",
+                       "--open-timeout-s", "60", "--status-period-s", "0.1"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["frames_left"] >= 5; }, 20s))
+      << "status: " << l.message;
+  EXPECT_EQ(l.counters["frames_right"], 0);
+  EXPECT_EQ(l.counters["reconnects_right"], 0);
+  EXPECT_EQ(l.counters["abandoned_readers"], 0);
+  EXPECT_EQ(camera.stop(), 0);
+  std::ifstream in(log);
+  const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(err.find("ptz-camera: 1 reader(s) still blocked in a driver at exit"),
+            std::string::npos)
+      << "stderr: " << err;
 }

@@ -63,3 +63,22 @@ TEST(CameraPtz, StatesNotNewerAreRefusedAndOldOnesForgotten) {
   EXPECT_TRUE(h.at(Side::kLeft, 5'000'000 + 20'000 * 50 - 100'001).stale);
   EXPECT_NEAR(h.at(Side::kLeft, 5'000'000 + 20'000 * 75 + 10'000).pose.pan_rad, 0.755, 1e-12);
 }
+
+TEST(CameraPtz, TimeGoingBackMoreThanTheHistoryStartsTheHistoryAgain) {
+  PtzHistory h(1.0, 0.1);
+  for (int k = 0; k <= 50; ++k) ASSERT_TRUE(h.add(100'000'000 + k * 20'000, {0.5, 0, 1}, {}));
+  // A late state within the history is still refused, and so is one exactly history_s older.
+  EXPECT_FALSE(h.add(100'990'000, {}, {}));
+  EXPECT_FALSE(h.add(100'000'000, {}, {}));
+  EXPECT_EQ(h.restarts(), 0);
+  // A looped log: time starts again 100 s earlier. The new time line is taken, counted once.
+  EXPECT_TRUE(h.add(1'000'000, {0.1, 0, 1}, {}));
+  EXPECT_EQ(h.restarts(), 1);
+  EXPECT_EQ(h.size(), 1u);
+  EXPECT_TRUE(h.add(1'020'000, {0.3, 0, 1}, {}));
+  EXPECT_EQ(h.newestUtime(), 1'020'000);
+  EXPECT_EQ(h.restarts(), 1);
+  const auto l = h.at(Side::kLeft, 1'010'000);
+  EXPECT_FALSE(l.stale);
+  EXPECT_DOUBLE_EQ(l.pose.pan_rad, 0.2);
+}

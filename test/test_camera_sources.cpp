@@ -8,6 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include <array>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
@@ -16,6 +18,7 @@
 
 #include "ptz/config.hpp"
 #include "ptz_driver/capture_source.hpp"
+#include "ptz_driver/stereo_camera.hpp"
 
 using namespace ptz::driver;
 
@@ -183,6 +186,51 @@ TEST(CameraSources, ALoopedFolderContinuesItsTimesOneIntervalAfterTheLast) {
   ASSERT_EQ(p.frames.size(), 5u);
   for (int k = 0; k < 5; ++k)
     EXPECT_EQ(p.frames[static_cast<size_t>(k)].capture_utime, 1'000'000 + k * 10'000);
+}
+
+TEST(CameraSources, ARecordingWithAGapLongerThanTheSourceTimeoutPlaysThroughWithoutReopening) {
+  // Left: 3 frames, 3 s without any, 3 more; right: 25 Hz throughout. Real time (~3.2 s).
+  TempDir dir;
+  std::array<std::vector<int64_t>, 2> times;
+  for (int k = 0; k < 3; ++k) times[0].push_back(1'000'000 + k * 40'000);
+  for (int k = 0; k < 3; ++k) times[0].push_back(4'080'000 + k * 40'000);
+  for (int k = 0; k <= 80; ++k) times[1].push_back(1'001'000 + k * 40'000);
+  CameraConfig c;
+  for (size_t s = 0; s < 2; ++s) {
+    const std::string folder = dir.path + (s == 0 ? "/left" : "/right");
+    ASSERT_EQ(::mkdir(folder.c_str(), 0755), 0);
+    std::string text;
+    for (size_t k = 0; k < times[s].size(); ++k) {
+      char name[32];
+      std::snprintf(name, sizeof name, "/%03zu.png", k);
+      cv::imwrite(folder + name, cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(0)));
+      text += std::to_string(times[s][k]) + "\n";
+    }
+    writeText(defaultTimestampsPath(folder), text);
+    c.source[s] = parseSource(folder, "source");
+    c.capture[s].timestamps = readTimestamps(defaultTimestampsPath(folder));
+  }
+  c.supervisor = {2.0, 5.0, 0.5, 8.0};  // the gap is longer than source_timeout_s
+  c.max_rate_hz = 0;
+  auto clock = std::make_shared<PlaybackClock>();
+  auto notifier = std::make_shared<FrameNotifier>();
+  StereoCamera camera(c, {makeCaptureFactory(c.source[0], c.capture[0], clock, notifier),
+                          makeCaptureFactory(c.source[1], c.capture[1], clock, notifier)});
+  std::vector<StampedPair> pairs;
+  const int64_t deadline = wallClockUtime() + 15'000'000;
+  while (!camera.finished() && wallClockUtime() < deadline) {
+    for (auto& p : camera.step(wallClockUtime())) pairs.push_back(std::move(p));
+    pollfd fd{notifier->fd(), POLLIN, 0};
+    ::poll(&fd, 1, 50);
+    notifier->drain();
+  }
+  ASSERT_TRUE(camera.finished());
+  const auto counters = camera.counters();
+  EXPECT_EQ(counters.at("reconnects_left"), 0) << "the gap was taken for a silent source";
+  EXPECT_EQ(counters.at("unmatched_left"), 0);
+  EXPECT_EQ(counters.at("frames_left"), 6);
+  ASSERT_EQ(pairs.size(), 6u);
+  for (size_t k = 0; k < 6; ++k) EXPECT_EQ(pairs[k].left.capture_utime, times[0][k]);
 }
 
 TEST(CameraSources, AVideoWithoutTimestampsIsTimedByItsFrameRate) {

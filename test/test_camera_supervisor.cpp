@@ -107,7 +107,7 @@ TEST(CameraSupervisor, AnUnpluggedCameraIsReconnectedAndSaysSo) {
 
 TEST(CameraSupervisor, AConnectionWithoutAFirstFrameIsGivenUpAfterTheOpenTimeout) {
   auto cam = std::make_shared<FakeCamera>();
-  SourceSupervisor s("left source x.avi", ptz::test::fakeFactory(cam),
+  SourceSupervisor s("left source rtsp://cam/x", ptz::test::fakeFactory(cam),
                      SupervisorParams{2.0, 5.0, 0.5, 8.0});
   std::vector<CapturedFrame> frames;
   s.step(0.0, &frames);
@@ -118,7 +118,7 @@ TEST(CameraSupervisor, AConnectionWithoutAFirstFrameIsGivenUpAfterTheOpenTimeout
   s.step(5.125, &frames);
   EXPECT_EQ(s.state(), State::kWaiting);
   EXPECT_EQ(s.problem(5.125),
-            "left source x.avi: no frame 5.1 s after opening, reconnecting in 0.5 s");
+            "left source rtsp://cam/x: no frame 5.1 s after opening, reconnecting in 0.5 s");
 }
 
 TEST(CameraSupervisor, TheEndOfAFileEndsTheSourceWithoutRetries) {
@@ -151,4 +151,26 @@ TEST(CameraSupervisor, ASourceTheCallerPausesIsNotTakenForSilent) {
   EXPECT_EQ(s.state(), State::kStreaming);
   s.step(5.25, &frames);  // really silent for 2.1 s
   EXPECT_EQ(s.state(), State::kWaiting);
+}
+
+TEST(CameraSupervisor, ARecordingWaitingForItsNextFrameHasNoTimeouts) {
+  auto cam = std::make_shared<FakeCamera>();
+  SourceSupervisor s("left source left.avi", ptz::test::fakeFactory(cam),
+                     SupervisorParams{2.0, 5.0, 0.5, 8.0}, /*live=*/false);
+  std::vector<CapturedFrame> frames;
+  // The first frame is recorded 6 s after the other side's: longer than the open timeout.
+  stepUntil(s, *cam, 0.0, 6.0, &frames);
+  EXPECT_EQ(s.state(), State::kConnecting);
+  cam->push(6'000'000);
+  s.step(6.125, &frames);
+  // Then a 3 s gap in the recording: longer than the silence timeout.
+  stepUntil(s, *cam, 6.25, 9.125, &frames);
+  EXPECT_EQ(s.state(), State::kStreaming);
+  cam->push(9'125'000);
+  cam->end_after_queue = true;
+  s.step(9.25, &frames);
+  EXPECT_EQ(frames.size(), 2u);
+  EXPECT_EQ(s.state(), State::kEnded);
+  EXPECT_EQ(cam->connections, 1);
+  EXPECT_EQ(s.reconnects(), 0);
 }

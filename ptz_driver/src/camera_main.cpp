@@ -3,6 +3,7 @@
 // the messages is the library's (stereo_camera.hpp); this loop waits on LCM and on the readers.
 #include <poll.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 
@@ -60,7 +61,7 @@ class CameraNode {
     status_.publishNow();  // up and subscribed
     while (!StopFlag::stopRequested()) {
       pollfd fds[2] = {{lcm_->getFileno(), POLLIN, 0}, {notifier_->fd(), POLLIN, 0}};
-      ::poll(fds, 2, 50);  // at least 20 Hz for timeouts and the status
+      ::poll(fds, 2, pollTimeoutMs());
       // States first, so that the frames that woke us find the states published before them.
       if (fds[0].revents & POLLIN) {
         while (lcm_->handleTimeout(0) > 0) {
@@ -76,17 +77,21 @@ class CameraNode {
     }
     report(wallUtime());
     status_.publishNow();
-    if (abandonedReaders() > 0) {
-      // A reader still blocked in a driver must not run into the static destructors.
-      std::fprintf(stderr, "ptz-camera: %d reader(s) still blocked in a driver at exit\n",
-                   abandonedReaders());
-      std::fflush(nullptr);
-      std::_Exit(0);
-    }
     return 0;
   }
 
  private:
+  // At least 20 Hz for timeouts and the status; sooner when a held pair's wait for its
+  // PTZ_STATE runs out.
+  int pollTimeoutMs() const {
+    int ms = 50;
+    if (const auto until = camera_->heldUntilUtime()) {
+      const int64_t left_us = *until - wallUtime();
+      ms = static_cast<int>(std::clamp<int64_t>((left_us + 999) / 1000, 0, ms));
+    }
+    return ms;
+  }
+
   void onState(const std::string& ch, const ptzstereo::ptz_state_t& m) {
     if (!camera_->onPtzState(m.utime, pose(m.left), pose(m.right))) {
       status_.countDropped(ch, "not_newer");
@@ -103,6 +108,7 @@ class CameraNode {
     lcm_->publish(ch_frame_, &msg);
     status_.countOut(ch_frame_, (msg.publish_utime - msg.utime) / 1000.0);
     wait_ms_.push_back((msg.publish_utime - p.first_arrival_utime) / 1000.0);
+    ptz_wait_ms_.push_back(p.ptz_wait_us / 1000.0);
   }
 
   void report(int64_t now) {
@@ -111,6 +117,11 @@ class CameraNode {
       status_.setCounter("pair_wait_us_p50", std::llround(percentile(wait_ms_, 50) * 1000));
       status_.setCounter("pair_wait_us_p99", std::llround(percentile(wait_ms_, 99) * 1000));
       wait_ms_.clear();
+    }
+    if (ptz_wait_ms_.size() >= 30) {  // of that, held for a PTZ_STATE after the capture
+      status_.setCounter("ptz_wait_us_p50", std::llround(percentile(ptz_wait_ms_, 50) * 1000));
+      status_.setCounter("ptz_wait_us_p99", std::llround(percentile(ptz_wait_ms_, 99) * 1000));
+      ptz_wait_ms_.clear();
     }
     std::string message;
     const Health h = camera_->health(now, &message);
@@ -131,7 +142,7 @@ class CameraNode {
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;
   std::unique_ptr<StereoCamera> camera_;
   int64_t seq_ = 0;
-  std::vector<double> wait_ms_;
+  std::vector<double> wait_ms_, ptz_wait_ms_;
 };
 
 }  // namespace
@@ -147,7 +158,18 @@ int main(int argc, char** argv) {
   driver::declareCameraParams(params);
   addImageEncodingParams(params);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
-    driver::CameraNode node(p, &lcm);
-    return node.run();
+    int rc = 0;
+    {
+      driver::CameraNode node(p, &lcm);
+      rc = node.run();
+    }  // its sources closed: a reader blocked in a driver is only now known to be abandoned
+    if (driver::abandonedReaders() > 0) {
+      // Such a reader must not run into the static destructors that exit() would run.
+      std::fprintf(stderr, "ptz-camera: %d reader(s) still blocked in a driver at exit\n",
+                   driver::abandonedReaders());
+      std::fflush(nullptr);
+      std::_Exit(rc);
+    }
+    return rc;
   });
 }

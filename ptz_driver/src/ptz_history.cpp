@@ -10,10 +10,21 @@ PtzHistory::PtzHistory(double history_s, double max_extrapolation_s)
       max_extrapolation_us_(std::llround(max_extrapolation_s * 1e6)) {}
 
 bool PtzHistory::add(int64_t utime, const PtzPose& left, const PtzPose& right) {
+  if (!states_.empty() && utime < states_.back().utime - history_us_) {
+    // Not a late state but another time line: without this every state would be refused until
+    // time passed the old newest again.
+    states_.clear();
+    ++restarts_;
+  }
   if (!states_.empty() && utime <= states_.back().utime) return false;
   states_.push_back({utime, {left, right}});
   while (states_.size() > 2 && states_.front().utime < utime - history_us_) states_.pop_front();
   return true;
+}
+
+std::optional<int64_t> PtzHistory::newestUtime() const {
+  if (states_.empty()) return std::nullopt;
+  return states_.back().utime;
 }
 
 PtzLookup PtzHistory::at(Side side, int64_t utime) const {

@@ -14,10 +14,12 @@ std::string seconds(double s) {
 
 }  // namespace
 
-SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params)
+SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params,
+                                   bool live)
     : name_(std::move(name)),
       factory_(std::move(factory)),
       params_(params),
+      live_(live),
       delay_s_(params.retry_initial_s) {}
 
 void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, size_t max_frames) {
@@ -60,6 +62,7 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
     giveUp(now_s, (had_frame_ ? "read failed: " : "cannot open: ") + source_->error());
     return;
   }
+  if (!live_) return;  // a recording waiting for its next frame's time is not silent
   if (state_ == State::kStreaming && now_s - last_frame_s_ > params_.source_timeout_s) {
     giveUp(now_s, "no frame for " + seconds(now_s - last_frame_s_));
   } else if (state_ == State::kConnecting && now_s - attempt_start_s_ > params_.open_timeout_s) {

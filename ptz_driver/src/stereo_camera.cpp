@@ -55,10 +55,13 @@ void declareCameraParams(Params& p) {
   p.add("no_pair_warn_s", 2.0, "s", "status ERROR when both sides deliver but none pair this long");
   p.add("ptz_history_s", 2.0, "s", "PTZ_STATE kept for stamping frames");
   p.add("max_ptz_extrapolation_s", 0.1, "s",
-        "frames further outside the PTZ_STATE history get the nearest state, counted ptz_stale");
+        "frames further outside the PTZ_STATE history get the nearest state, counted ptz_stale; "
+        "also the longest a pair waits after its capture for a PTZ_STATE");
   p.add("max_rate_hz", 30.0, "Hz", "publish at most this many pairs a second (0: every pair)");
-  p.add("source_timeout_s", 2.0, "s", "a streaming source without a frame this long is reopened");
-  p.add("open_timeout_s", 5.0, "s", "a connection without a first frame this long is reopened");
+  p.add("source_timeout_s", 2.0, "s",
+        "a streaming live source without a frame this long is reopened (not files)");
+  p.add("open_timeout_s", 5.0, "s",
+        "a live connection without a first frame this long is reopened (not files)");
   p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure");
   p.add("retry_max_s", 8.0, "s", "longest reconnection delay");
 }
@@ -124,9 +127,9 @@ CameraConfig cameraConfigFrom(const Params& p) {
 StereoCamera::StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories)
     : config_(config),
       sources_{SourceSupervisor("left source " + config.source[0].text, std::move(factories[0]),
-                                config.supervisor),
+                                config.supervisor, config.source[0].live()),
                SourceSupervisor("right source " + config.source[1].text, std::move(factories[1]),
-                                config.supervisor)},
+                                config.supervisor, config.source[1].live())},
       pairer_(config.pairer),
       history_(config.ptz_history_s, config.max_ptz_extrapolation_s) {}
 
@@ -155,7 +158,6 @@ std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
       pairer_.setEnded(static_cast<Side>(s));
     }
   }
-  std::vector<StampedPair> out;
   for (auto& pair : pairer_.takePairs()) {
     const int64_t t = pair.left.capture_utime;
     if (config_.max_rate_hz > 0) {
@@ -168,25 +170,63 @@ std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
       next_allowed_utime_ = (published_any_ ? std::max(next_allowed_utime_, t) : t) + period;
     }
     published_any_ = true;
-    StampedPair sp;
-    const PtzLookup l = history_.at(Side::kLeft, pair.left.capture_utime);
-    const PtzLookup r = history_.at(Side::kRight, pair.right.capture_utime);
-    sp.left_pose = l.pose;
-    sp.right_pose = r.pose;
-    sp.ptz_stale = l.stale || r.stale;
-    if (sp.ptz_stale) ++ptz_stale_;
-    last_stale_ = sp.ptz_stale;
-    sp.first_arrival_utime = pair.first_arrival_utime;
-    sp.left = std::move(pair.left);
-    sp.right = std::move(pair.right);
-    out.push_back(std::move(sp));
+    held_.push_back({std::move(pair), now_utime});
+  }
+  std::vector<StampedPair> out;
+  // In order: a later pair is never ready before an earlier one is.
+  while (!held_.empty() && ready(held_.front(), now_utime)) {
+    out.push_back(stamp(std::move(held_.front()), now_utime));
+    held_.pop_front();
   }
   return out;
 }
 
+int64_t StereoCamera::releaseUtime(const Held& h) const {
+  // Live capture times are wall clock; a recording's may lie anywhere (its wait starts when the
+  // pair is made, and past recordings wait not at all).
+  const int64_t latest = std::max(h.pair.left.capture_utime, h.pair.right.capture_utime);
+  return std::min(latest, h.made_utime) + std::llround(config_.max_ptz_extrapolation_s * 1e6);
+}
+
+bool StereoCamera::ready(const Held& h, int64_t now_utime) const {
+  const std::optional<int64_t> newest = history_.newestUtime();
+  if (!newest) return true;  // no PTZ_STATE yet (no driver running): waiting would gain nothing
+  const int64_t latest = std::max(h.pair.left.capture_utime, h.pair.right.capture_utime);
+  const auto max_extrapolation_us = std::llround(config_.max_ptz_extrapolation_s * 1e6);
+  // Both captures covered: interpolated. The newest state too old to stamp it: stale whatever.
+  return *newest >= latest || latest - *newest > max_extrapolation_us ||
+         now_utime >= releaseUtime(h);
+}
+
+StampedPair StereoCamera::stamp(Held h, int64_t now_utime) {
+  StereoPair& pair = h.pair;
+  StampedPair sp;
+  const PtzLookup l = history_.at(Side::kLeft, pair.left.capture_utime);
+  const PtzLookup r = history_.at(Side::kRight, pair.right.capture_utime);
+  sp.left_pose = l.pose;
+  sp.right_pose = r.pose;
+  sp.ptz_stale = l.stale || r.stale;
+  if (sp.ptz_stale) ++ptz_stale_;
+  last_stale_ = sp.ptz_stale;
+  const std::optional<int64_t> newest = history_.newestUtime();
+  if (newest && *newest < std::max(pair.left.capture_utime, pair.right.capture_utime)) {
+    ++ptz_extrapolated_;  // no state at or after its capture came in time: the newest one
+  }
+  sp.first_arrival_utime = pair.first_arrival_utime;
+  sp.ptz_wait_us = now_utime - h.made_utime;
+  sp.left = std::move(pair.left);
+  sp.right = std::move(pair.right);
+  return sp;
+}
+
+std::optional<int64_t> StereoCamera::heldUntilUtime() const {
+  if (held_.empty()) return std::nullopt;
+  return releaseUtime(held_.front());
+}
+
 bool StereoCamera::finished() const {
   return ended_[0] && ended_[1] && pairer_.waiting(Side::kLeft) == 0 &&
-         pairer_.waiting(Side::kRight) == 0;
+         pairer_.waiting(Side::kRight) == 0 && held_.empty();
 }
 
 Health StereoCamera::health(int64_t now_utime, std::string* message) const {
@@ -228,6 +268,8 @@ std::map<std::string, int64_t> StereoCamera::counters() const {
   c["pairs"] = pairer_.pairs();
   c["pairs_skipped_rate"] = skipped_rate_;
   c["ptz_stale"] = ptz_stale_;
+  c["ptz_extrapolated"] = ptz_extrapolated_;
+  c["ptz_history_restarts"] = history_.restarts();
   c["abandoned_readers"] = abandonedReaders();
   return c;
 }

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <optional>
 
 #include "ptz/rig.hpp"  // PtzPose, Side
 
@@ -23,10 +24,14 @@ class PtzHistory {
   // outside the history get the nearest state without being stale.
   PtzHistory(double history_s, double max_extrapolation_s);
 
-  // False (state ignored) when utime is not after the newest state's.
+  // False (state ignored) when utime is not after the newest state's, unless it is older by
+  // more than history_s: time went backwards (a looped log, a restarted simulator, an NTP step)
+  // and the history starts again from this state (counted by restarts()).
   bool add(int64_t utime, const PtzPose& left, const PtzPose& right);
   PtzLookup at(Side side, int64_t utime) const;
   size_t size() const { return states_.size(); }
+  std::optional<int64_t> newestUtime() const;
+  int64_t restarts() const { return restarts_; }
 
  private:
   struct State {
@@ -35,6 +40,7 @@ class PtzHistory {
   };
   int64_t history_us_, max_extrapolation_us_;
   std::deque<State> states_;
+  int64_t restarts_ = 0;
 };
 
 }  // namespace ptz::driver

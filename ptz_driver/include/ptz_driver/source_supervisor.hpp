@@ -14,8 +14,8 @@
 namespace ptz::driver {
 
 struct SupervisorParams {
-  double source_timeout_s = 2.0;  // streaming: no frame for this long -> reconnect
-  double open_timeout_s = 5.0;    // connecting: no first frame for this long -> reconnect
+  double source_timeout_s = 2.0;  // live, streaming: no frame for this long -> reconnect
+  double open_timeout_s = 5.0;    // live, connecting: no first frame for this long -> reconnect
   double retry_initial_s = 0.5;   // first back-off; doubles after every failed attempt
   double retry_max_s = 8.0;       // back-off ceiling
 };
@@ -24,8 +24,11 @@ class SourceSupervisor {
  public:
   enum class State { kWaiting, kConnecting, kStreaming, kEnded };
 
-  // name: how messages call the source, e.g. "right source rtsp://cam/stream".
-  SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params);
+  // name: how messages call the source, e.g. "right source rtsp://cam/stream". live: false for
+  // files and folders, which have no silence or open timeout: their reader legitimately waits
+  // for the next frame's recorded time (a gap in a recording), and they end or fail by themselves.
+  SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params,
+                   bool live = true);
 
   // At now_s: connects when a retry is due, appends the frames the source has to *frames (at
   // most max_frames: the caller has no room for more, which does not count as silence), gives
@@ -53,6 +56,7 @@ class SourceSupervisor {
   std::string name_;
   SourceFactory factory_;
   SupervisorParams params_;
+  bool live_;
   std::unique_ptr<FrameSource> source_;
   State state_ = State::kWaiting;
   double retry_at_s_ = -1e300;  // the first step connects at once

@@ -5,7 +5,9 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,7 @@ struct StampedPair {
   PtzPose left_pose, right_pose;  // each at its own image's capture time
   bool ptz_stale = false;
   int64_t first_arrival_utime = 0;  // when the earlier frame of the pair arrived (wall clock)
+  int64_t ptz_wait_us = 0;          // how long it was held for a PTZ_STATE after its capture
 };
 
 enum class Health { kOk, kWarn, kError };
@@ -45,11 +48,17 @@ class StereoCamera {
   // factories: left, right (capture sources in ptz-camera, fakes in tests).
   StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories);
 
-  // False (ignored) when not after the newest state.
+  // False (ignored) when not after the newest state (see PtzHistory::add).
   bool onPtzState(int64_t utime, const PtzPose& left, const PtzPose& right);
-  // Takes the sources' frames at now_utime (wall clock); returns the pairs to publish.
+  // Takes the sources' frames at now_utime (wall clock); returns the pairs to publish. A pair is
+  // held until a PTZ_STATE at or after both its capture times has arrived, so that its poses are
+  // interpolated rather than the last state's (states arrive 20-40 ms after their time), or until
+  // max_ptz_extrapolation_s after its capture (then the nearest state). Not held when no state
+  // ever arrived or the newest is already too old to stamp it (no driver, or it stopped).
   std::vector<StampedPair> step(int64_t now_utime);
-  // Both sources ended (files without loop) and every frame is decided.
+  // When a held pair's wait runs out (wall clock; step it then), nullopt when none is held.
+  std::optional<int64_t> heldUntilUtime() const;
+  // Both sources ended (files without loop) and every frame is decided and released.
   bool finished() const;
 
   Health health(int64_t now_utime, std::string* message) const;
@@ -61,12 +70,21 @@ class StereoCamera {
 
  private:
   CameraConfig config_;
+  struct Held {
+    StereoPair pair;
+    int64_t made_utime;  // wall clock
+  };
+  bool ready(const Held& h, int64_t now_utime) const;
+  int64_t releaseUtime(const Held& h) const;
+  StampedPair stamp(Held h, int64_t now_utime);
+
   std::array<SourceSupervisor, 2> sources_;
   StereoPairer pairer_;
   PtzHistory history_;
+  std::deque<Held> held_;  // waiting for their PTZ_STATE, oldest first
   std::array<bool, 2> ended_{false, false};
   std::array<int64_t, 2> resized_{0, 0};
-  int64_t skipped_rate_ = 0, ptz_stale_ = 0;
+  int64_t skipped_rate_ = 0, ptz_stale_ = 0, ptz_extrapolated_ = 0;
   bool last_stale_ = false, published_any_ = false;
   int64_t next_allowed_utime_ = 0;
 };
