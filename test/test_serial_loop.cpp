@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <thread>
 
 #include "ptz/plant.hpp"
 #include "ptz/transport.hpp"
@@ -137,11 +136,7 @@ void followClampAndStop(Emulator* heads, const std::vector<std::string>& args, d
   EXPECT_EQ(w.counters["head_malformed"], 0);
   EXPECT_EQ(driver.stop(), 0) << "SIGTERM: the driver stops the heads and exits cleanly";
   // The stop bytes left before the exit; the server may still be reading them.
-  const auto deadline = std::chrono::steady_clock::now() + 2s;
-  while (!server.with(stopped) && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(5ms);  // polling the emulator's state, bounded
-  }
-  EXPECT_TRUE(server.with(stopped)) << "the heads did not get the stop bytes";
+  EXPECT_TRUE(server.waitFor(stopped, 2s)) << "the heads did not get the stop bytes";
 }
 
 // VISCA's moves carry optional targets; Pelco-D's whole poses: one shape for the check above.

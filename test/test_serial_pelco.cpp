@@ -1,7 +1,8 @@
 // Pelco-D heads against the head emulator through a pseudo-terminal: the model's mapping of
 // angles, the frames and checksums on the wire, position queries one at a time on a shared
 // half-duplex bus, the estimate of heads that cannot say where they are (the shared plant
-// model), garbage and the stop. Time is the test's (seconds from 0).
+// model), garbage and the stop (not into a reply; during homing). Time is the test's (seconds
+// from 0).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +13,9 @@
 #include "ptz/plant.hpp"
 #include "ptz_driver/pelco_d_emulator.hpp"
 #include "ptz_driver/pelco_d_head.hpp"
+#include "support/half_duplex_bus.hpp"
 #include "support/pty_pair.hpp"
+#include "support/serial_serve.hpp"
 
 using namespace ptz::driver;
 using ptz::test::PtyPair;
@@ -109,8 +112,8 @@ TEST_F(PelcoSerial, CommandsAreTheFramesWithTheirChecksums) {
   head.command({90 * kDeg, 11 * kDeg, 5.5}, 0.2);                         // only the tilt
   EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::setTiltPosition(1, 34900)});
   EXPECT_EQ(head.stats().sent, 4);
-  EXPECT_TRUE(head.stop(0.3, 1.0));
-  EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::stop(1)});
+  EXPECT_TRUE(head.stop(0.3, 1.0));  // twice: nothing confirms it
+  EXPECT_EQ(frames(2), (std::vector<Bytes>{pelco_d::stop(1), pelco_d::stop(1)}));
   EXPECT_EQ(pelco_d::stop(1), (Bytes{0xFF, 0x01, 0x00, 0x00, 0x00, 0x00, 0x01}));
 }
 
@@ -239,4 +242,65 @@ TEST_F(PelcoSerial, GarbageAndASilentHeadAreCounted) {
   head.inquire(0.2, 0.1);
   EXPECT_EQ(head.stats().timeouts, 1);
   EXPECT_EQ(frames(1), std::vector<Bytes>{pelco_d::queryPan(1)});
+}
+
+// At exit or by the deadman, with a position query out: a stop sent at once would collide with
+// the reply on its way and be lost, unnoticed. It waits for the reply, then goes twice.
+TEST_F(PelcoSerial, AStopWaitsForTheReplyOnItsWayAndGoesTwice) {
+  PelcoDBusEmulator heads(model, plant, {1}, true);
+  ptz::test::HalfDuplexBus bus(&heads, 0.06);  // query and reply: 58 ms at 2400 baud
+  ptz::test::SerialServer<ptz::test::HalfDuplexBus> server(pty, &bus);
+  PelcoDHead head(model, line, 1, true, plant);
+  head.inquire(0, 1.5);  // the pan query
+  EXPECT_TRUE(head.stop(0, 3.0)) << "the bus was free within the timeout and the stops went";
+  const std::vector<Bytes> expected = {pelco_d::queryPan(1), pelco_d::stop(1), pelco_d::stop(1)};
+  EXPECT_TRUE(
+      server.waitFor([&](ptz::test::HalfDuplexBus& b) { return b.heads().received() == expected; },
+                     std::chrono::milliseconds(2000)));
+  server.stop();
+  EXPECT_EQ(bus.collidedBytes(), 0);
+  EXPECT_EQ(head.stats().replies, 1) << "the reply came whole and was read";
+  EXPECT_EQ(head.stats().malformed, 0);
+}
+
+// Without position queries a deadman stop during the start-up homing leaves the head somewhere
+// between where it was and home: no pose (no PTZ_STATE) until it has been sent home again.
+TEST_F(PelcoSerial, WithoutQueriesAStopDuringHomingLeavesThePoseUnknownUntilHomedAgain) {
+  PelcoDBusEmulator bus(model, plant, {1}, false, {1.0, 0.3, 1.0});  // switched on away from home
+  PelcoDHead head(model, line, 1, false, plant);
+  const std::vector<Bytes> home = {pelco_d::setPanPosition(1, 0), pelco_d::setTiltPosition(1, 0),
+                                   pelco_d::setZoomPosition(1, 0)};
+  head.start(0);
+  EXPECT_EQ(serve(bus, 3, 0), home);
+  head.inquire(0.1, 0.1);
+  EXPECT_TRUE(head.stop(0.1, 1.0));  // the deadman, 0.1 s into the homing
+  serve(bus, 2, 0.1);
+  EXPECT_GT(bus.pose(0, 5.0).pan_rad, 0.3) << "the real head stopped part-way";
+  head.inquire(5.0, 0.1);  // long after the homing would have ended
+  EXPECT_FALSE(head.measured()) << "where it stopped is unknown";
+  // The next command sends it home, not to the pose: from an unknown place it would be lost.
+  head.command({0.5, 0.2, 4.0}, 5.0);
+  EXPECT_EQ(serve(bus, 3, 5.0), home);
+  head.inquire(6.0, 0.1);
+  EXPECT_FALSE(head.measured()) << "homing again";
+  // Stopped again while homing; setpoints again: the driver asks it to find its position.
+  EXPECT_TRUE(head.stop(6.0, 1.0));
+  serve(bus, 2, 6.0);
+  PtzHead& as_driver = head;
+  as_driver.findPosition(8.0);
+  EXPECT_EQ(serve(bus, 3, 8.0), home);
+  as_driver.findPosition(8.1);  // once
+  EXPECT_EQ(head.stats().sent, 3 + 2 + 3 + 2 + 3);
+  head.inquire(10.3, 0.1);
+  EXPECT_FALSE(head.measured()) << "the homing takes 2.333 s";
+  head.inquire(10.34, 0.1);
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measured()->pan_rad, 0.0);
+  EXPECT_NEAR(bus.pose(0, 10.34).pan_rad, 0.0, 1e-3) << "and the real head is there";
+  // A stop after the homing: the estimate holds where the head stopped (here: home).
+  EXPECT_TRUE(head.stop(11.0, 1.0));
+  serve(bus, 2, 11.0);
+  head.inquire(12.0, 0.1);
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measured()->pan_rad, 0.0);
 }

@@ -1,6 +1,8 @@
-// Serial VISCA heads when things go wrong: camera errors by name, a silent camera, lost
-// replies, an unplugged adapter, garbage on the line, "command buffer full".
+// Serial VISCA heads when things go wrong: camera errors by name, a silent camera, lost and
+// late replies, an unplugged adapter, garbage on the line, "command buffer full".
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "support/visca_serial_fixture.hpp"
 
@@ -53,6 +55,43 @@ TEST_F(ViscaSerial, AReplyThatSkipsARequestMeansThatRequestsReplyWasLost) {
   EXPECT_EQ(ptz::test::readViscaPackets(pty, 1),
             std::vector<Bytes>{visca::panTiltPositionInquiry(1)});
   EXPECT_EQ(left.stats().malformed, 0);
+}
+
+// On a busy chain an answer can come after its timeout, once the inquiry has been asked again:
+// it is the old inquiry's (counted late), not the new one's, which would date the old position
+// at the new inquiry's time.
+TEST_F(ViscaSerial, AnAnswerAfterItsTimeoutIsNotTakenForTheNewInquirys) {
+  startChain();
+  left.command({0.5, 0.2, 4.0}, 0);  // the motors move from home
+  serve(2, 0);
+  ASSERT_TRUE(read(0, [&] { return replies() == 2 + 4; }));  // 2 ACKs, 2 completions
+  const int64_t before = left.stats().replies;
+  left.inquire(0, 0.1);
+  const auto first = ptz::test::readViscaPackets(pty, 1);
+  const Bytes held = chain.feed(first[0].data(), first[0].size(), 0);  // answered at home
+  left.inquire(0.15, 0.1);  // unanswered for the timeout: counted, asked again
+  EXPECT_EQ(left.stats().timeouts, 1);
+  const auto again = ptz::test::readViscaPackets(pty, 1);
+  ASSERT_EQ(again, first);
+  pty.write(held);  // the first answer comes after all
+  ASSERT_TRUE(
+      read(0.16, [&] { return left.stats().replies + left.stats().late_replies > before; }));
+  EXPECT_EQ(left.stats().late_replies, 1);
+  EXPECT_EQ(left.stats().replies, before) << "not the new inquiry's answer";
+  EXPECT_TRUE(left.stats().round_trip_ms.empty());
+  pty.write(chain.feed(again[0].data(), again[0].size(), 0.17));  // the new one's answer
+  ASSERT_TRUE(read(0.18, [&] { return left.stats().replies == before + 1; }));
+  serve(1, 0.18);  // the zoom inquiry follows
+  ASSERT_TRUE(read(0.18, [&] { return left.stats().replies == before + 2; }));
+  ASSERT_TRUE(left.measured());
+  // Where the plant is at 0.17 s (x_target (1 - exp(-t/T)), T 0.24 s), not home.
+  EXPECT_NEAR(left.measured()->pan_rad, model.panRad(382) * (1 - std::exp(-0.17 / 0.24)),
+              1 / model.pan_units_per_rad);
+  EXPECT_DOUBLE_EQ(left.measuredAtS(), (0.15 + 0.18) / 2);  // the new inquiry's round trip
+  ASSERT_EQ(left.stats().round_trip_ms.size(), 1u);
+  EXPECT_NEAR(left.stats().round_trip_ms[0], 30.0, 1e-9);
+  EXPECT_EQ(left.stats().malformed, 0);
+  EXPECT_EQ(left.stats().timeouts, 1);
 }
 
 TEST_F(ViscaSerial, AnUnpluggedAdapterIsOneNamedErrorAndTheProcessGoesOn) {

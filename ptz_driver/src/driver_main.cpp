@@ -3,7 +3,7 @@
 // backend in head_factory. Safety whatever arrives:
 // setpoints are clamped to the limits and slewed at most max_setpoint_rate, stale ones are
 // dropped, without a fresh one for deadman_s the heads hold where they are, and they stop on
-// exit (SIGINT/SIGTERM).
+// exit (SIGINT/SIGTERM, or an exception out of the loop).
 #include <poll.h>
 
 #include <algorithm>
@@ -14,6 +14,7 @@
 #include "ptz/plant.hpp"
 #include "ptz/transport.hpp"
 #include "ptz_driver/head_factory.hpp"
+#include "ptz_driver/heads_stop.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 
@@ -57,6 +58,11 @@ class DriverNode {
 
   int run() {
     const double period_s = 1.0 / p_.getDouble("state_rate_hz");
+    // Motion stops on exit, also when an exception leaves this loop.
+    HeadsStop stopper({heads_[0].get(), heads_[1].get()}, 0.3, &DriverNode::nowS, [this](size_t i) {
+      const std::string side = i == 0 ? "left" : "right";
+      log_.warn("stop_" + side, "ptz-driver: the " + side + " head did not confirm the stop");
+    });
     for (auto& h : heads_) h->start(nowS());
     status_.publishNow();
     double next_tick = nowS();
@@ -76,9 +82,7 @@ class DriverNode {
       }
       status_.maybePublish();
     }
-    for (auto& h : heads_) {  // motion stops on exit
-      if (!h->stop(nowS(), 0.3)) log_.warn("stop", "ptz-driver: a camera did not answer the stop");
-    }
+    stopper.stop();
     status_.publishNow();
     return 0;
   }
@@ -142,6 +146,8 @@ class DriverNode {
         c.tilt_rad += std::clamp(target_[i]->tilt_rad - c.tilt_rad, -step, step);
         c.zoom = target_[i]->zoom;
         heads_[i]->command(c, now);
+      } else if (target_[i]) {
+        heads_[i]->findPosition(now);
       }
       heads_[i]->inquire(now, inquiry_timeout_s_);
     }
@@ -174,7 +180,7 @@ class DriverNode {
 
   void report() {
     std::vector<double> rtt;
-    int64_t timeouts = 0, errors = 0, buffer_full = 0, malformed = 0;
+    int64_t timeouts = 0, errors = 0, buffer_full = 0, malformed = 0, late = 0;
     for (auto& h : heads_) {
       auto& s = h->stats();
       rtt.insert(rtt.end(), s.round_trip_ms.begin(), s.round_trip_ms.end());
@@ -182,6 +188,7 @@ class DriverNode {
       errors += s.errors;
       buffer_full += s.buffer_full;
       malformed += s.malformed;
+      late += s.late_replies;
       if (!s.last_error.empty()) log_.warn("head_error", "ptz-driver: head error: " + s.last_error);
     }
     rtt_ms_.insert(rtt_ms_.end(), rtt.begin(), rtt.end());
@@ -195,6 +202,7 @@ class DriverNode {
     status_.setCounter("head_errors", errors);
     status_.setCounter("head_buffer_full", buffer_full);
     status_.setCounter("head_malformed", malformed);
+    status_.setCounter("head_late_replies", late);
     const bool up = heads_[0]->measured() && heads_[1]->measured() &&
                     nowS() - std::min(heads_[0]->measuredAtS(), heads_[1]->measuredAtS()) < 1.0;
     const bool estimated = !heads_[0]->measuresPosition() || !heads_[1]->measuresPosition();

@@ -1,6 +1,7 @@
 #include "ptz_driver/pelco_d_head.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <utility>
 
@@ -50,7 +51,12 @@ bool PelcoDHead::send(const Bytes& frame) {
 void PelcoDHead::start(double now_s) {
   start_s_ = now_s;
   if (position_query_) return;  // it will say where it is
+  sendHome(now_s);
+}
+
+void PelcoDHead::sendHome(double now_s) {
   // Where the head is is unknown: send it home; the estimate holds once it must be there.
+  homing_stopped_ = false;
   book_.forgetSent();
   wanted_ = home(plant_);
   sendCommands(now_s);
@@ -59,8 +65,16 @@ void PelcoDHead::start(double now_s) {
 }
 
 void PelcoDHead::command(const PtzPose& pose, double now_s) {
+  if (homing_stopped_) {  // where it is is unknown: home first, then the poses
+    sendHome(now_s);
+    return;
+  }
   wanted_ = pose;
   service(now_s);
+}
+
+void PelcoDHead::findPosition(double now_s) {
+  if (homing_stopped_) sendHome(now_s);
 }
 
 void PelcoDHead::service(double now_s) {
@@ -111,20 +125,37 @@ void PelcoDHead::sendQuery(double now_s) {
   query_ = a;
   next_query_.reset();
   query_sent_s_ = now_s;
-  line_->awaitReply(now_s + timeout_s_);
+  line_->awaitReply(address_, now_s + timeout_s_);
 }
 
 bool PelcoDHead::stop(double now_s, double timeout_s) {
   book_.forgetSent();
   wanted_.reset();
-  if (!position_query_) {  // the estimate stops where it has got to
+  next_query_.reset();  // nothing but the stop goes now
+  if (!position_query_ && homed_at_s_ >= 0 && now_s < homed_at_s_) {
+    // Stopped somewhere between where it was and home: where is unknown.
+    homing_stopped_ = true;
+  } else if (!position_query_) {  // the estimate stops where it has got to
     estimateTo(now_s);
     for (Pt1Axis& a : estimate_) a.command(sinceStartS(now_s), a.position());
   }
-  if (!send(pelco_d::stop(address_))) return false;
+  // Half duplex: a stop sent into a reply on its way collides with it and is lost unnoticed,
+  // so wait (reading replies) for the bus to be free. The waits run on the caller's clock.
+  const auto start = std::chrono::steady_clock::now();
+  auto now = [&] {
+    return now_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  const bool was_free = waitUntil(
+      line_->fd(), timeout_s, [&] { read(now()); }, [&] { return line_->free(now()); });
+  // Sent anyway when the bus stays busy: a stop that may collide beats none. Twice, as nothing
+  // confirms it and one frame may still be garbled.
+  const Bytes frame = pelco_d::stop(address_);
+  if (!send(frame) || !send(frame)) return false;
   line_->talked(address_);
+  const double left_s = timeout_s - (now() - now_s);
   return waitUntil(
-      -1, timeout_s, [] {}, [&] { return line_->idle(); });
+             -1, left_s, [] {}, [&] { return line_->idle(); }) &&
+         was_free;
 }
 
 void PelcoDHead::inquire(double now_s, double timeout_s) {
@@ -133,7 +164,7 @@ void PelcoDHead::inquire(double now_s, double timeout_s) {
     estimateTo(now_s);
   } else if (query_ && now_s - query_sent_s_ > timeout_s) {
     ++book_.stats().timeouts;  // no answer: the bus is free again, the round starts over
-    line_->replyCame();
+    line_->replyCame(address_);
     query_.reset();
     next_query_ = HeadBook::kPan;
   } else if (!query_ && !next_query_) {
@@ -143,6 +174,12 @@ void PelcoDHead::inquire(double now_s, double timeout_s) {
 }
 
 void PelcoDHead::receive(double now_s) {
+  read(now_s);
+  if (!position_query_) estimateTo(now_s);
+  service(now_s);
+}
+
+void PelcoDHead::read(double now_s) {
   line_->pump(&book_);
   while (line_->nextUnrouted()) ++book_.stats().malformed;  // from an address nobody has
   while (const auto r = line_->next(address_)) {
@@ -154,12 +191,9 @@ void PelcoDHead::receive(double now_s) {
     const HeadBook::Axis a = *query_;
     book_.measured(a, r->value);
     if (a == HeadBook::kPan) book_.roundTrip(query_sent_s_, now_s);
-    query_.reset();
-    line_->replyCame();
+    query_.reset();  // (the line saw the reply come: the bus is free)
     if (a != HeadBook::kZoom) next_query_ = a == HeadBook::kPan ? HeadBook::kTilt : HeadBook::kZoom;
   }
-  if (!position_query_) estimateTo(now_s);
-  service(now_s);
 }
 
 void PelcoDHead::estimateTo(double now_s) {
@@ -175,7 +209,9 @@ std::optional<PtzPose> PelcoDHead::measured() const {
                    model_.tiltRad(book_.measuredUnits(HeadBook::kTilt)),
                    model_.zoom.ratio(book_.measuredUnits(HeadBook::kZoom))};
   }
-  if (homed_at_s_ < 0 || estimate_at_s_ < homed_at_s_) return std::nullopt;  // still homing
+  if (homing_stopped_ || homed_at_s_ < 0 || estimate_at_s_ < homed_at_s_) {
+    return std::nullopt;  // still homing, or stopped before home
+  }
   return PtzPose{estimate_[0].position(), estimate_[1].position(), estimate_[2].position()};
 }
 

@@ -100,6 +100,31 @@ bool ViscaHeadCore::onReply(Request what, const visca::Reply& r, double sent_s, 
   return true;
 }
 
+bool ViscaHeadCore::answers(Request what, const visca::Reply& r) const {
+  int32_t pan = 0, tilt = 0;
+  int zoom = 0;
+  return what == Request::kPanTiltInquiry
+             ? visca::decodePanTiltPosition(r, model_.pan_nibbles, &pan, &tilt)
+             : what == Request::kZoomInquiry && visca::decodeZoomPosition(r, &zoom);
+}
+
+bool ViscaHeadCore::onLateReply(const visca::Reply& r) {
+  using Kind = visca::Reply::Kind;
+  ++book_.stats().late_replies;
+  switch (r.kind) {
+    case Kind::kAck:
+      return false;
+    case Kind::kCompletion:
+      book_.bufferFreed();
+      return true;
+    case Kind::kError:
+      book_.error(visca::errorName(r.error));  // by name; too old to hold commands back
+      return true;
+    default:
+      return true;
+  }
+}
+
 void ViscaHeadCore::lost(Request what) {
   if (isCommand(what)) {
     ++book_.stats().timeouts;

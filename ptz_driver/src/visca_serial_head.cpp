@@ -27,7 +27,7 @@ ViscaHeadCore::Send ViscaSerialHead::sender(double now_s, bool paced) {
     // One pan-tilt and one zoom command at a time on their way to an ACK.
     if (paced && isCommand(what) &&
         std::any_of(awaiting_.begin(), awaiting_.end(),
-                    [what](const Pending& p) { return p.what == what; })) {
+                    [what](const Pending& p) { return p.what == what && !p.late(); })) {
       return false;
     }
     if (!line_->send(packet)) return false;
@@ -55,12 +55,15 @@ bool ViscaSerialHead::stop(double now_s, double timeout_s) {
 
 void ViscaSerialHead::inquire(double now_s, double timeout_s) {
   for (auto it = awaiting_.begin(); it != awaiting_.end();) {
-    if (now_s - it->sent_s <= timeout_s) {
-      ++it;
+    if (it->late() && now_s > it->late_until_s) {
+      it = awaiting_.erase(it);  // its reply was lost indeed
       continue;
     }
-    core_.lost(it->what);
-    it = awaiting_.erase(it);
+    if (!it->late() && now_s - it->sent_s > timeout_s) {
+      core_.lost(it->what);
+      it->late_until_s = now_s + timeout_s;
+    }
+    ++it;
   }
   for (auto it = sockets_.begin(); it != sockets_.end();) {
     it = now_s - it->second.sent_s > kCompletionMaxWaitS ? sockets_.erase(it) : std::next(it);
@@ -93,12 +96,16 @@ void ViscaSerialHead::onBroadcast(const visca::Reply& r) {
   }
 }
 
-std::optional<ViscaSerialHead::Pending> ViscaSerialHead::takeFirst(bool (*fits)(Request)) {
+std::optional<ViscaSerialHead::Pending> ViscaSerialHead::takeFirst(
+    const std::function<bool(Request)>& fits) {
   const auto it = std::find_if(awaiting_.begin(), awaiting_.end(),
                                [fits](const Pending& p) { return fits(p.what); });
   if (it == awaiting_.end()) return std::nullopt;
-  // Replies come in order: whatever was sent before this one lost its reply.
-  for (auto lost = awaiting_.begin(); lost != it; ++lost) core_.lost(lost->what);
+  // Replies come in order: whatever was sent before this one lost its reply (the late ones
+  // were counted when they timed out).
+  for (auto lost = awaiting_.begin(); lost != it; ++lost) {
+    if (!lost->late()) core_.lost(lost->what);
+  }
   const Pending p = *it;
   awaiting_.erase(awaiting_.begin(), it + 1);
   return p;
@@ -117,7 +124,8 @@ void ViscaSerialHead::handle(const visca::Reply& r, double now_s) {
   } else if (r.kind == Kind::kAck || r.kind == Kind::kCompletion) {
     p = takeFirst(isCommand);  // a completion without its ACK: the ACK was lost
   } else if (r.kind == Kind::kInquiry) {
-    p = takeFirst(isInquiry);
+    // By its shape: a late zoom inquiry ahead must not take the pan-tilt answer.
+    p = takeFirst([&](Request what) { return isInquiry(what) && core_.answers(what, r); });
   } else if (r.kind == Kind::kError) {
     p = takeFirst(isAny);  // refused on arrival: the oldest request
   }
@@ -125,7 +133,8 @@ void ViscaSerialHead::handle(const visca::Reply& r, double now_s) {
     ++core_.stats().malformed;  // a reply to nothing we asked
     return;
   }
-  const bool done = core_.onReply(p->what, r, p->sent_s, now_s, acked_before);
+  const bool done =
+      p->late() ? core_.onLateReply(r) : core_.onReply(p->what, r, p->sent_s, now_s, acked_before);
   if (!done) sockets_[r.socket] = *p;  // ACKed: its completion will name the socket
 }
 

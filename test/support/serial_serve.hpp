@@ -33,6 +33,16 @@ class SerialServer {
     std::lock_guard<std::mutex> lock(mutex_);
     return f(*emulator_);
   }
+  // Whether done(emulator) came true within timeout (what was written may still be on its way
+  // to the emulator when the writer returns).
+  template <class F>
+  bool waitFor(F done, std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!with(done) && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));  // polling, bounded
+    }
+    return with(done);
+  }
 
  private:
   void run() {

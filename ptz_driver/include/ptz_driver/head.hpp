@@ -14,6 +14,7 @@ namespace ptz::driver {
 
 struct HeadStats {
   int64_t sent = 0, replies = 0, errors = 0, timeouts = 0, buffer_full = 0, malformed = 0;
+  int64_t late_replies = 0;           // replies to requests already counted in timeouts
   std::vector<double> round_trip_ms;  // of position inquiries; cleared by whoever reads it
   std::string last_error;             // the last error the head reported, by name
 };
@@ -29,6 +30,9 @@ class PtzHead {
   // Stops pan, tilt and zoom where they are; true when the head confirmed it within timeout_s
   // (or, without replies, when the stop was sent).
   virtual bool stop(double now_s, double timeout_s) = 0;
+  // Setpoints wait but measured() is empty: a head that lost its position (a stop during its
+  // homing) finds it again. Most heads need nothing.
+  virtual void findPosition(double now_s) { (void)now_s; }
   // Asks where the head is, unless a question is already out and not timed out.
   virtual void inquire(double now_s, double timeout_s) = 0;
   // Reads whatever the head has sent.

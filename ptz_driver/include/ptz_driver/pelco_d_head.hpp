@@ -8,7 +8,9 @@
 //   otherwise (most heads): measuresPosition() is false and measured() is an estimate of where
 //     the commanded motion has got to, from the shared plant model (Pt1Axis with the
 //     configured limits). start() sends the head home and the estimate begins there once the
-//     longest move home would have ended. Nothing confirms a command or the stop.
+//     longest move home would have ended; a stop before then leaves the pose unknown until
+//     the head has been sent home again (by the next command or findPosition). Nothing
+//     confirms a command or the stop.
 #pragma once
 
 #include <array>
@@ -32,9 +34,12 @@ class PelcoDHead : public PtzHead {
 
   void start(double now_s) override;
   void command(const PtzPose& pose, double now_s) override;
-  // Sends the stop frame (FF aa 00 00 00 00 cs); true once it has left the port within
-  // timeout_s. Pelco-D heads do not confirm it.
+  // Waits (reading replies) for the bus to be free, then sends the stop frame
+  // (FF aa 00 00 00 00 cs) twice; true when the bus was free and both frames have left the
+  // port within timeout_s. Pelco-D heads do not confirm it.
   bool stop(double now_s, double timeout_s) override;
+  // After a stop during the homing: sends the head home again.
+  void findPosition(double now_s) override;
   void inquire(double now_s, double timeout_s) override;
   void receive(double now_s) override;
 
@@ -50,7 +55,10 @@ class PelcoDHead : public PtzHead {
   void service(double now_s);
   void sendCommands(double now_s);
   void sendQuery(double now_s);
+  void sendHome(double now_s);
   bool send(const Bytes& frame);
+  // Takes the replies that came (routing, matching them to the query out); sends nothing.
+  void read(double now_s);
   // The estimate's clock: seconds since start() (the plant model counts from 0).
   double sinceStartS(double now_s) const { return now_s - start_s_; }
   void estimateTo(double now_s);
@@ -70,6 +78,7 @@ class PelcoDHead : public PtzHead {
   // Without position_query: pan, tilt, zoom as the plant model moves them, valid once homed.
   std::array<Pt1Axis, 3> estimate_;
   double start_s_ = 0, homed_at_s_ = -1, estimate_at_s_ = 0;
+  bool homing_stopped_ = false;  // stopped before home: where it is is unknown
 };
 
 }  // namespace ptz::driver

@@ -50,11 +50,21 @@ class SerialLine {
   bool idle() { return port_.outputPending() == 0; }
   // A half-duplex bus (RS-485): one talks at a time, nobody while a reply is awaited, and the
   // heads that want the bus take turns (the last to talk waits while another wants it).
-  void awaitReply(double until_s) { reply_awaited_until_s_ = until_s; }
-  void replyCame() { reply_awaited_until_s_ = -1; }
+  // The reply from `address` is awaited until until_s; it has come once pump() has it whole,
+  // whichever head reads it (a stop must not wait for a reply already in).
+  void awaitReply(int address, double until_s) {
+    awaited_from_ = address;
+    reply_awaited_until_s_ = until_s;
+  }
+  // The reply from `address` came (or will not): the bus is free, unless another's is awaited.
+  void replyCame(int address) {
+    if (address == awaited_from_) reply_awaited_until_s_ = -1;
+  }
+  // Nothing goes out and no reply is awaited: what is sent now collides with nothing.
+  bool free(double now_s) { return now_s >= reply_awaited_until_s_ && idle(); }
   bool mayTalk(int address, double now_s) {
     wanting_.insert(address);
-    if (now_s < reply_awaited_until_s_ || !idle()) return false;
+    if (!free(now_s)) return false;
     return last_talker_ != address || wanting_.size() == 1;
   }
   void talked(int address) {
@@ -75,6 +85,7 @@ class SerialLine {
     error_.clear();
     parser_.feed(data.data(), data.size());
     while (auto r = parser_.next()) {
+      replyCame(r->address);
       const auto it = inbox_.find(r->address);
       (it == inbox_.end() ? unrouted_ : it->second).push_back(std::move(*r));
     }
@@ -103,6 +114,7 @@ class SerialLine {
   int64_t garbage_counted_ = 0;
   bool started_ = false;
   double reply_awaited_until_s_ = -1;
+  int awaited_from_ = -1;
   std::set<int> wanting_;
   int last_talker_ = -1;
   std::string error_;  // of a write

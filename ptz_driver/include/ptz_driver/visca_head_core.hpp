@@ -40,6 +40,12 @@ class ViscaHeadCore {
   // when the request is answered for good; false for an ACK (a completion is still to come).
   bool onReply(Request what, const visca::Reply& reply, double sent_s, double now_s,
                bool acked_before);
+  // Whether an inquiry answer has the shape of the answer to `what` (pan-tilt or zoom).
+  bool answers(Request what, const visca::Reply& reply) const;
+  // A reply to a request already counted lost: counted (HeadStats::late_replies), an error
+  // named, a freed socket noted; not measured (its time is unknown to the round now out).
+  // False for an ACK, as onReply.
+  bool onLateReply(const visca::Reply& reply);
   // A request went unanswered: counted (an inquiry round once); a command goes again with the
   // next command().
   void lost(Request what);

@@ -5,11 +5,14 @@
 // wait in a FIFO for their ACK or answer, and ACKed commands by socket for their completion.
 // The camera takes one inquiry at a time (the zoom inquiry follows the pan-tilt answer) and has
 // two command sockets; at most one pan-tilt and one zoom command wait for an ACK, which paces
-// the commands to what the line and the camera take. The rest is ViscaHeadCore (shared with
-// VISCA over IP).
+// the commands to what the line and the camera take. A request unanswered for the timeout is
+// counted lost, but its reply may still come on a busy line: it stays in the FIFO, late, for
+// one more timeout, so a late reply is taken (and counted) as its own, never as the reply to a
+// newer request. The rest is ViscaHeadCore (shared with VISCA over IP).
 #pragma once
 
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -30,7 +33,8 @@ class ViscaSerialHead : public PtzHead {
   void command(const PtzPose& pose, double now_s) override;
   // Sends the stops (whatever waits) until the camera acknowledges both, within timeout_s.
   bool stop(double now_s, double timeout_s) override;
-  // Forgets requests unanswered for timeout_s (counted; a command goes again), then asks.
+  // Counts requests unanswered for timeout_s as lost (a command goes again; their late replies
+  // are still taken for one more timeout_s), then asks.
   void inquire(double now_s, double timeout_s) override;
   void receive(double now_s) override;
 
@@ -44,12 +48,14 @@ class ViscaSerialHead : public PtzHead {
   struct Pending {
     Request what;
     double sent_s;
+    double late_until_s = -1;  // >= 0: timed out (counted); its reply is taken until then
+    bool late() const { return late_until_s >= 0; }
   };
   ViscaHeadCore::Send sender(double now_s, bool paced);
   void handle(const visca::Reply& r, double now_s);
   void onBroadcast(const visca::Reply& r);
   // The first request waiting in the FIFO that `fits`; those before it were lost on the way.
-  std::optional<Pending> takeFirst(bool (*fits)(Request));
+  std::optional<Pending> takeFirst(const std::function<bool(Request)>& fits);
 
   ViscaHeadCore core_;
   std::shared_ptr<ViscaSerialLine> line_;
