@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "support/gpio_rig.hpp"
 
@@ -66,6 +68,68 @@ TEST(GpioAxis, HomingStartingOnTheSwitchBacksOffFirst) {
   EXPECT_NEAR(rig.head->measured()->pan_rad, rig.chip->positionRad(0), 1.5 * kCount);
   rig.run(5);
   EXPECT_NEAR(rig.chip->positionRad(0), 0, 3 * kCount);
+}
+
+TEST(GpioAxis, HomingStartingOnTheMaxSwitchSeeksTowardMin) {
+  const auto c = GpioRig::config();
+  GpioRig rig(c, fakeAxis(c.pan, 1.15), fakeAxis(c.tilt, -0.9));
+  ASSERT_FALSE(rig.chip->level(kPanMax));  // closed: the axis coasted onto it, or was pushed
+  rig.head->start(0);
+  // 2.25 rad to the min switch at 0.3 rad/s: 7.5 s (and the loop's lag, under 0.1 rad).
+  ASSERT_TRUE(rig.run(9, [&] { return rig.head->measured().has_value(); }))
+      << rig.head->stats().last_error;
+  EXPECT_NEAR(rig.chip->positionRad(0), -1.1, 0.01);
+  EXPECT_NEAR(rig.head->measured()->pan_rad, rig.chip->positionRad(0), 1.5 * kCount);
+  rig.run(4.5);
+  EXPECT_NEAR(rig.chip->positionRad(0), 0, 3 * kCount);
+  EXPECT_EQ(rig.head->state(0), GpioAxis::State::kReady);
+  EXPECT_EQ(rig.head->stats().errors, 0) << rig.head->stats().last_error;
+}
+
+TEST(GpioAxis, AMotorTurningTheWrongWayIsNamedWhateverTheSwitchItStartsOn) {
+  const auto c = GpioRig::config();
+  struct Case {
+    const char* what;
+    double start_rad;
+    bool swap_encoder;
+    double max_stop_rad;
+    std::vector<std::string> said;
+  };
+  const Case cases[] = {
+      // Leads and encoder both swapped: the counts follow the ramp while the shaft runs to max,
+      // so the max switch closing (open at the start) is what tells.
+      {"off the max switch", 0.9, true, 1.2, {"max limit switch closed", "swap its leads"}},
+      // Leads swapped, encoder right: the counts go up while it is driven down.
+      {"on the max switch", 1.15, false, 1.2, {"swap its leads", "swap its A and B"}},
+      // Both swapped, no end stop: the counts go down, the max switch never opens.
+      {"on the max switch, no stop", 1.15, true, 60, {"still reads closed after 2.2 rad"}},
+  };
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.what);
+    auto pan = fakeAxis(c.pan, k.start_rad);
+    pan.reversed = true;
+    if (k.swap_encoder) std::swap(pan.lines.encoder_a, pan.lines.encoder_b);
+    pan.max_stop_rad = k.max_stop_rad;
+    GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+    rig.head->start(0);
+    ASSERT_TRUE(rig.run(10, [&] { return rig.head->state(0) == GpioAxis::State::kFault; }));
+    const std::string said = rig.head->stats().last_error;
+    for (const auto& s : k.said) EXPECT_NE(said.find(s), std::string::npos) << said;
+    EXPECT_NE(said.find("left pan"), std::string::npos) << said;
+    EXPECT_FALSE(rig.chip->level(kPanEnable));
+  }
+}
+
+TEST(GpioAxis, AMaxSwitchStuckClosedIsNamedWhenTheMinSwitchCloses) {
+  const auto c = GpioRig::config();
+  auto pan = fakeAxis(c.pan, 0);
+  pan.max_switch_rad = -10;  // reads closed everywhere (a shorted wire)
+  GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+  rig.head->start(0);
+  ASSERT_TRUE(rig.run(6, [&] { return rig.head->state(0) == GpioAxis::State::kFault; }));
+  EXPECT_NE(rig.head->stats().last_error.find("both limit switches read closed"), std::string::npos)
+      << rig.head->stats().last_error;
+  EXPECT_NEAR(rig.chip->positionRad(0), -1.1, 0.02);  // it went down to the min switch
 }
 
 TEST(GpioAxis, HomingTimeoutIsAnErrorNamingTheAxis) {

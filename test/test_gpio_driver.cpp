@@ -50,8 +50,12 @@ TEST(GpioDriver, FollowsSetpointsHoldsAndStopsOnTheSimulatedChip) {
   // Homing: 0.3 rad to the min switches at 0.3 (pan) and 0.2 rad/s (tilt), about 1.6 s.
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return l.states > 0; }, 10s));
-  EXPECT_NEAR(l.last.left.tilt_rad, -0.6, 0.02);
-  EXPECT_NEAR(l.last.right.tilt_rad, -0.6, 0.02);
+  // Homed at the switch (-0.7) and on the way back to 0: where exactly depends on when the
+  // first state came (ptz_driver_tests has the exact numbers, stepped).
+  for (const auto& head : {l.last.left, l.last.right}) {
+    EXPECT_GE(head.tilt_rad, -0.7 - 0.01);
+    EXPECT_LE(head.tilt_rad, 0.003);
+  }
   EXPECT_DOUBLE_EQ(l.last.left.zoom, 1.0);  // gpio_zoom: there is no zoom motor
   // Setpoints at 50 Hz until both heads are within 3 counts (1018.6 counts/rad).
   auto there = [&] {

@@ -1,15 +1,18 @@
 // Quadrature decoding (x4 state table) against hand-made sequences, and the simulated encoder
 // counted through the decoder: known counts for a known rotation of the simulated motor, both
-// ways; lost edges counted as illegal transitions.
+// ways; lost edges counted as illegal transitions; the edges of lines read one after the other
+// merged in time order.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "ptz_driver/gpio_event_merger.hpp"
 #include "ptz_driver/gpio_fake.hpp"
 #include "ptz_driver/quadrature.hpp"
 
 using ptz::driver::FakeAxisSpec;
 using ptz::driver::FakeGpio;
+using ptz::driver::GpioEventMerger;
 using ptz::driver::LineEvent;
 using ptz::driver::QuadratureDecoder;
 
@@ -138,4 +141,74 @@ TEST(Quadrature, ALostEdgeIsAnIllegalTransition) {
   o.run(0.2);
   EXPECT_EQ(o.decoder.illegal(), 1);
   EXPECT_EQ(o.decoder.count(), static_cast<int64_t>(std::floor(o.chip.positionRad(0) * 1000)));
+}
+
+namespace {
+
+constexpr int kA = 2, kB = 3;
+
+void decode(QuadratureDecoder* d, const std::vector<LineEvent>& events) {
+  for (const auto& e : events) d->edge(e.line == kA ? 0 : 1, e.rising, e.time_s);
+}
+
+}  // namespace
+
+TEST(GpioEventMerger, AnEdgeQueuedAfterItsLineWasReadIsNotOvertakenByALaterOne) {
+  // Up one turn (+4): A rises at 1 ms, B at 2 ms, A falls at 3 ms, B at 4 ms. The first batch
+  // takes its cutoff at 2.5 ms and reads line A at 2.6 ms (A's fall is still to come), then
+  // line B at 4.5 ms (both of B's edges are there).
+  GpioEventMerger m;
+  std::vector<LineEvent> batch1, batch2;
+  m.add({kA, true, 1e-3});
+  m.add({kB, true, 2e-3});
+  m.add({kB, false, 4e-3});
+  m.take(2.5e-3, &batch1);
+  ASSERT_EQ(batch1.size(), 2u);
+  EXPECT_EQ(batch1[0].line, kA);
+  EXPECT_EQ(batch1[1].line, kB);
+  EXPECT_EQ(m.pending(), 1u);  // B's fall, after the cutoff
+  // The next batch (cutoff 5 ms) reads A's fall: it comes out before B's fall, held back.
+  m.add({kA, false, 3e-3});
+  m.take(5e-3, &batch2);
+  ASSERT_EQ(batch2.size(), 2u);
+  EXPECT_EQ(batch2[0].line, kA);
+  EXPECT_DOUBLE_EQ(batch2[0].time_s, 3e-3);
+  EXPECT_EQ(batch2[1].line, kB);
+  EXPECT_DOUBLE_EQ(batch2[1].time_s, 4e-3);
+  EXPECT_EQ(m.pending(), 0u);
+  QuadratureDecoder d;
+  d.reset(false, false);
+  decode(&d, batch1);
+  decode(&d, batch2);
+  EXPECT_EQ(d.count(), 4);  // each batch merely sorted: B falls before A, +1 +1 -1 -1 = 0
+  EXPECT_EQ(d.illegal(), 0);
+}
+
+TEST(GpioEventMerger, DeliversUpToTheCutoffInTimeOrderKeepingEachLinesOrder) {
+  GpioEventMerger m;
+  std::vector<LineEvent> out;
+  m.take(1.0, &out);  // nothing pending: nothing
+  EXPECT_TRUE(out.empty());
+  // Two lines read one after the other, each in order; two of A's edges at the same time.
+  for (const LineEvent& e : {LineEvent{kA, true, 0.1}, LineEvent{kA, false, 0.3},
+                             LineEvent{kA, true, 0.3}, LineEvent{kA, false, 0.7}}) {
+    m.add(e);
+  }
+  for (const LineEvent& e : {LineEvent{kB, true, 0.2}, LineEvent{kB, false, 0.5}}) m.add(e);
+  m.take(0.5, &out);  // at the cutoff is delivered
+  const double times[] = {0.1, 0.2, 0.3, 0.3, 0.5};
+  const int lines[] = {kA, kB, kA, kA, kB};
+  ASSERT_EQ(out.size(), 5u);
+  for (size_t i = 0; i < out.size(); ++i) {
+    EXPECT_DOUBLE_EQ(out[i].time_s, times[i]) << i;
+    EXPECT_EQ(out[i].line, lines[i]) << i;
+  }
+  EXPECT_FALSE(out[2].rising);  // A's fall, then its rise: as read
+  EXPECT_TRUE(out[3].rising);
+  out.clear();
+  m.take(0.6, &out);  // A's 0.7 still waits
+  EXPECT_TRUE(out.empty());
+  m.take(0.7, &out);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_DOUBLE_EQ(out[0].time_s, 0.7);
 }

@@ -7,7 +7,17 @@
 namespace ptz::driver {
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// A switch bounces for some milliseconds as it opens: at homing speed well under this.
+constexpr double kSwitchClearRad = 0.01;
+// Counts against the drive beyond what backlash and noise give: the motor or encoder is wrong.
+constexpr int64_t kWrongWayCounts = 10;
+
+std::string rad(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
 }
+}  // namespace
 
 GpioAxis::GpioAxis(AxisConfig config, GpioLines& lines)
     : config_(std::move(config)), lines_(lines) {
@@ -30,11 +40,27 @@ void GpioAxis::startHoming(double now_s) {
   error_.clear();
   homing_start_s_ = now_s;
   min_closed_ = !lines_.get(config_.lines.limit_min);
+  max_closed_ = !lines_.get(config_.lines.limit_max);
   target_rad_ = rawRad();
   ramp_ = true;
-  // Sitting on the switch: off it first, so that the reference is always the closing edge.
-  state_ = min_closed_ ? State::kBackoff : State::kSeek;
-  goal_rad_ = min_closed_ ? kInf : -kInf;
+  // Sitting on the min switch: off it first, so that the reference is always the closing edge.
+  if (min_closed_) {
+    state_ = State::kBackoff;
+    goal_rad_ = kInf;
+    phase_start_raw_ = rawRad();
+  } else {
+    seek(now_s);
+  }
+}
+
+void GpioAxis::seek(double now_s) {
+  state_ = State::kSeek;
+  homing_start_s_ = now_s;
+  goal_rad_ = -kInf;
+  phase_start_raw_ = rawRad();
+  // On the max switch (coasted onto it, or turned there by hand): toward min is away from it.
+  leaving_max_ = max_closed_;
+  max_opened_ = false;
 }
 
 void GpioAxis::setTarget(double target_rad) {
@@ -116,20 +142,28 @@ void GpioAxis::control(double now_s) {
                   config_.homing_timeout_s, config_.lines.limit_min);
     return fault(why);
   }
-  if (homing && std::abs(target_rad_ - rawRad()) > config_.homing_max_lag_rad) {
-    return fault(
-        "does not follow the homing ramp: is the motor powered, and do the encoder's "
-        "counts go up toward max (else swap its A and B lines)?");
-  }
+  if (homing && std::abs(target_rad_ - rawRad()) > config_.homing_max_lag_rad) return faultLag();
+  if (homing && max_closed_ && min_closed_)
+    return fault("both limit switches read closed: check their wiring");
   if (state_ == State::kBackoff) {
     if (max_closed_) return fault("both limit switches read closed: check their wiring");
-    if (!min_closed_) {  // off the switch: now seek it
-      state_ = State::kSeek;
-      homing_start_s_ = now_s;
-      goal_rad_ = -kInf;
-    }
+    if (!min_closed_) seek(now_s);  // off the switch: now seek it
   } else if (state_ == State::kSeek) {
-    if (max_closed_) {
+    if (leaving_max_) {
+      const double span_rad = config_.max_switch_rad - config_.min_switch_rad;
+      if (!max_closed_ && !max_opened_) {
+        max_opened_ = true;
+        max_open_raw_ = rawRad();
+      }
+      if (max_opened_ && !max_closed_ && rawRad() <= max_open_raw_ - kSwitchClearRad) {
+        leaving_max_ = false;  // off it: from now on its closing is an edge
+      } else if (max_closed_ && phase_start_raw_ - rawRad() > span_rad) {
+        return fault("the max limit switch still reads closed after " + rad(span_rad) +
+                     " rad toward min (the distance between the switches): the motor turns the "
+                     "wrong way and so does the encoder (swap the motor's leads and the "
+                     "encoder's A and B lines), or the switch is stuck closed (check its wiring)");
+      }
+    } else if (max_closed_) {
       return fault(
           "the max limit switch closed while homing toward min: the motor turns the "
           "wrong way (swap its leads)");
@@ -155,6 +189,21 @@ void GpioAxis::control(double now_s) {
     if (u != 0) u = std::copysign(std::min(config_.max_duty, config_.min_duty + std::abs(u)), u);
   }
   duty_ = limitDuty(u);
+}
+
+// Behind the homing ramp: counts that went against the drive say which way round it is wired.
+void GpioAxis::faultLag() {
+  const bool up = state_ == State::kBackoff;
+  const double moved_rad = (rawRad() - phase_start_raw_) * (up ? 1 : -1);
+  if (moved_rad < -kWrongWayCounts / config_.counts_per_rad) {
+    return fault(std::string("homing, the encoder counts toward ") + (up ? "min" : "max") +
+                 " when the motor is driven toward " + (up ? "max" : "min") +
+                 ": the motor turns the wrong way (swap its leads) or the encoder counts the "
+                 "wrong way (swap its A and B lines)");
+  }
+  fault("does not follow the homing ramp (more than " + rad(config_.homing_max_lag_rad) +
+        " rad behind it, having moved " + rad(moved_rad) + " rad toward " + (up ? "max" : "min") +
+        "): is the motor powered and free to turn, and its encoder connected?");
 }
 
 // The speed from the times of the encoder's edges (exact at constant speed, not quantised by

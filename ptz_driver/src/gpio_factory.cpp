@@ -55,7 +55,11 @@ void declareGpioParams(Params& p) {
   p.add("homing_max_lag_rad", 0.2, "rad",
         "backend gpio: homing fails when an axis lags its ramp by more (motor or encoder wrong)");
   p.add("gpio_zoom", 1.0, "ratio", "backend gpio: the zoom the heads report (no zoom motor)");
-  const double switch_rad[2][2] = {{-3.05, 3.05}, {-0.6, 1.65}};
+  p.add("coast_rad", 0.16, "rad",
+        "backend gpio: how far an axis runs on when its drive is cut at full speed (speed x the "
+        "motor's time constant); the switches must lie at least this far outside the soft limits");
+  // At least coast_rad outside the default soft limits (+-170 deg pan, -30..90 deg tilt).
+  const double switch_rad[2][2] = {{-3.15, 3.15}, {-0.7, 1.75}};
   const double homing_rad_s[2] = {0.3, 0.2};
   for (int i = 0; i < 2; ++i) {
     const std::string a = i == 0 ? "pan" : "tilt";
@@ -114,11 +118,20 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
     c.soft_max_rad = plant.axis[i].max_position;
     c.min_switch_rad = p.getDouble(a + "_min_switch_rad");
     c.max_switch_rad = p.getDouble(a + "_max_switch_rad");
-    if (!(c.min_switch_rad < c.soft_min_rad) || !(c.max_switch_rad > c.soft_max_rad)) {
-      throw ConfigError("parameters '" + a + "_min_switch_rad' and '" + a +
-                        "_max_switch_rad' must lie outside the soft limits '" + a + "_min' (" +
-                        num(c.soft_min_rad) + ") and '" + a + "_max' (" + num(c.soft_max_rad) +
-                        ")");
+    // Stopped at a soft limit from full speed, an axis coasts on: it must come to rest before
+    // the switch, not run through it toward the mechanical stop beyond.
+    const double coast_rad = checked(p, "coast_rad", 0, 1e9, false);
+    const double margin_rad[2] = {c.soft_min_rad - c.min_switch_rad,
+                                  c.max_switch_rad - c.soft_max_rad};
+    for (int end = 0; end < 2; ++end) {
+      if (margin_rad[end] >= coast_rad && margin_rad[end] > 0) continue;  // false for NaN
+      const std::string sw = a + (end == 0 ? "_min_switch_rad" : "_max_switch_rad");
+      const std::string soft = a + (end == 0 ? "_min" : "_max");
+      throw ConfigError("parameter '" + sw + "' is " + num(p.getDouble(sw)) +
+                        ": it must lie at least 'coast_rad' (" + num(coast_rad) + ") " +
+                        (end == 0 ? "below" : "above") + " the soft limit '" + soft + "' (" +
+                        num(end == 0 ? c.soft_min_rad : c.soft_max_rad) +
+                        "), so that an axis stopped there coasts to rest before the switch");
     }
     c.pwm_hz = checked(p, "pwm_hz", 0, 20000, true);
     c.control_hz = checked(p, "control_hz", 0, 20000, true);
@@ -130,7 +143,7 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
   return head;
 }
 
-std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
+std::vector<FakeAxisSpec> simulatedAxes(const GpioHeadConfig& head) {
   std::vector<FakeAxisSpec> axes;
   for (const AxisConfig* c : {&head.pan, &head.tilt}) {
     FakeAxisSpec s;
@@ -143,7 +156,11 @@ std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
     s.start_rad = c->min_switch_rad + 0.3;
     axes.push_back(s);
   }
-  auto chip = std::make_unique<FakeGpio>(axes);
+  return axes;
+}
+
+std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
+  auto chip = std::make_unique<FakeGpio>(simulatedAxes(head));
   chip->useClock(gpioClockS);
   return chip;
 }

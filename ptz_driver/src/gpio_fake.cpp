@@ -139,6 +139,7 @@ void FakeGpio::integrate(Axis& a, double h_s) {
     const bool up = lines_[l.dir].level;
     const bool shorted = l.dir2 >= 0 && lines_[l.dir2].level == up;  // IN1 = IN2: brake
     drive = shorted ? 0 : (up ? 1 : -1);
+    if (s.reversed) drive = -drive;
   }
   // First order, solved exactly over the step.
   const double target = drive * s.max_speed_rad_s;
@@ -215,6 +216,13 @@ int64_t FakeGpio::risingEdges(int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = lines_.find(offset);
   return it == lines_.end() ? 0 : it->second.rising;
+}
+
+FakeGpio::OutputTally FakeGpio::tally(int offset) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = lines_.find(offset);
+  if (it == lines_.end()) return {now_s_, 0, 0};
+  return {now_s_, it->second.high_s, it->second.rising};
 }
 
 void FakeGpio::setSwitch(size_t axis, bool max_end, double position_rad) {

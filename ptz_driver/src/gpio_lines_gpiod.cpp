@@ -3,7 +3,6 @@
 #include <gpiod.h>
 #include <poll.h>
 
-#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -11,6 +10,7 @@
 #include <map>
 
 #include "ptz/config.hpp"
+#include "ptz_driver/gpio_event_merger.hpp"
 #include "ptz_driver/gpio_lines.hpp"
 
 namespace ptz::driver {
@@ -25,6 +25,10 @@ double clockS(clockid_t id) {
   clock_gettime(id, &t);
   return seconds(t);
 }
+
+// How long after stamping an edge the kernel may take to queue it (its interrupt thread runs at
+// real-time priority: normally tens of microseconds). Edges are delivered that much later.
+constexpr double kQueueDelayS = 200e-6;
 
 class GpiodLines : public GpioLines {
  public:
@@ -81,25 +85,27 @@ class GpiodLines : public GpioLines {
 
   void readEvents(std::vector<LineEvent>* out) override {
     if (pollfds_.empty()) return;
-    // Since Linux 5.7 the timestamps are CLOCK_MONOTONIC, before that CLOCK_REALTIME: take the
-    // nearer one and move it onto the monotonic clock.
+    // The cutoff first (gpio_event_merger.hpp): the lines are read one after the other. The
+    // kernel stamps an edge in its interrupt handler but queues it from the interrupt thread a
+    // little later, so the cutoff is that much earlier.
     const double wall = clockS(CLOCK_REALTIME), mono = clockS(CLOCK_MONOTONIC);
-    const size_t first = out->size();
-    if (::poll(pollfds_.data(), pollfds_.size(), 0) <= 0) return;
-    for (size_t i = 0; i < pollfds_.size(); ++i) {
-      if (!(pollfds_[i].revents & POLLIN)) continue;
-      gpiod_line_event ev[16];  // the kernel keeps at most 16 per line (v1 uAPI)
-      const int n = gpiod_line_event_read_fd_multiple(pollfds_[i].fd, ev, 16);
-      if (n < 0) ++io_errors_;
-      for (int k = 0; k < n; ++k) {
-        double t = seconds(ev[k].ts);
-        if (std::abs(t - wall) < std::abs(t - mono)) t -= wall - mono;
-        out->push_back({poll_offsets_[i], ev[k].event_type == GPIOD_LINE_EVENT_RISING_EDGE, t});
+    const double cutoff_s = mono - kQueueDelayS;
+    if (::poll(pollfds_.data(), pollfds_.size(), 0) > 0) {
+      for (size_t i = 0; i < pollfds_.size(); ++i) {
+        if (!(pollfds_[i].revents & POLLIN)) continue;
+        gpiod_line_event ev[16];  // the kernel keeps at most 16 per line (v1 uAPI)
+        const int n = gpiod_line_event_read_fd_multiple(pollfds_[i].fd, ev, 16);
+        if (n < 0) ++io_errors_;
+        for (int k = 0; k < n; ++k) {
+          // Since Linux 5.7 the timestamps are CLOCK_MONOTONIC, before that CLOCK_REALTIME:
+          // take the nearer one and move it onto the monotonic clock.
+          double t = seconds(ev[k].ts);
+          if (std::abs(t - wall) < std::abs(t - mono)) t -= wall - mono;
+          merger_.add({poll_offsets_[i], ev[k].event_type == GPIOD_LINE_EVENT_RISING_EDGE, t});
+        }
       }
     }
-    // Each line's events are in order; merge the lines by time.
-    std::stable_sort(out->begin() + static_cast<std::ptrdiff_t>(first), out->end(),
-                     [](const LineEvent& a, const LineEvent& b) { return a.time_s < b.time_s; });
+    merger_.take(cutoff_s, out);  // also what earlier batches held back
   }
 
   int64_t ioErrors() const override { return io_errors_; }
@@ -131,6 +137,7 @@ class GpiodLines : public GpioLines {
   std::map<int, gpiod_line*> lines_, events_;
   std::vector<pollfd> pollfds_;
   std::vector<int> poll_offsets_;
+  GpioEventMerger merger_;
   int64_t io_errors_ = 0;
 };
 

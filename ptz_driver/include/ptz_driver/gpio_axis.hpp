@@ -46,7 +46,9 @@ class GpioAxis {
   GpioAxis(AxisConfig config, GpioLines& lines);
 
   // Homing: toward the min switch at homing speed until it closes (off it first if it is
-  // closed), the position there is min_switch_rad, then to 0.
+  // closed), the position there is min_switch_rad, then to 0. Starting on the max switch is
+  // fine: it seeks toward min as usual, and the max switch must open within the distance
+  // between the switches.
   void startHoming(double now_s);
   // A target position (clamped to the soft limits); ignored until homed; resumes after stop.
   void setTarget(double target_rad);
@@ -71,6 +73,8 @@ class GpioAxis {
  private:
   double rawRad() const { return decoder_.count() / config_.counts_per_rad; }
   void fault(const std::string& why);
+  void faultLag();
+  void seek(double now_s);
   void control(double now_s);
   void updateSpeed(double now_s);
   double limitDuty(double duty);
@@ -84,6 +88,11 @@ class GpioAxis {
   int64_t zero_count_ = 0;
   bool switch_seen_ = false;  // the min switch's closing edge, seen during the seek
   int64_t switch_count_ = 0;
+  double phase_start_raw_ = 0;  // where the backoff or the seek began
+  // The seek began on the max switch: until it has opened and the axis is kSwitchClearRad past
+  // where it did (a switch bounces as it opens), max closed is not an edge.
+  bool leaving_max_ = false, max_opened_ = false;
+  double max_open_raw_ = 0;
   bool min_closed_ = false, max_closed_ = false;
   double target_rad_ = 0;  // in the homed frame, or raw (counts / cpr) while homing
   double goal_rad_ = 0;    // where a ramp (homing speed) ends

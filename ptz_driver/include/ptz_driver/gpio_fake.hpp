@@ -24,6 +24,7 @@ struct FakeAxisSpec {
   double start_rad = 0;                                // where the shaft is at power-up
   double min_switch_rad = -1.1, max_switch_rad = 1.1;  // closed at or beyond
   double min_stop_rad = -1.2, max_stop_rad = 1.2;      // mechanical end stops
+  bool reversed = false;  // the motor's leads swapped: it turns toward min when driven to max
 };
 
 class FakeGpio : public GpioLines {
@@ -50,6 +51,13 @@ class FakeGpio : public GpioLines {
   bool level(int line) const;
   double highTimeS(int line) const;     // how long an output has been high in all
   int64_t risingEdges(int line) const;  // of an output
+  // Both of an output's tallies and the simulation time they are at, taken together (a head
+  // on its own thread may step between separate calls).
+  struct OutputTally {
+    double at_s = 0, high_s = 0;
+    int64_t rising = 0;
+  };
+  OutputTally tally(int line) const;
   // Moves a switch (an obstacle, a badly placed switch).
   void setSwitch(size_t axis, bool max_end, double position_rad);
   // An edge as the kernel would report it now, whatever the line's level (a glitch).

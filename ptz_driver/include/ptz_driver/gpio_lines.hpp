@@ -33,7 +33,8 @@ class GpioLines {
 
   virtual void set(int line, bool high) = 0;
   virtual bool get(int line) = 0;
-  // Appends the edges seen on event lines since the last call, oldest first.
+  // Appends the edges seen on event lines since the last call, oldest first, also across calls
+  // (a real chip holds back the last 0.2 ms for that: gpio_event_merger.hpp).
   virtual void readEvents(std::vector<LineEvent>* events) = 0;
   // Failed reads and writes so far (the control loop keeps running; the head reports them).
   virtual int64_t ioErrors() const { return 0; }
