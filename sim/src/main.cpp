@@ -4,10 +4,13 @@
 #include <poll.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <mutex>
+#include <thread>
 
 #include "ptz/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
@@ -84,9 +87,13 @@ class SimNode {
     start_steady_ = std::chrono::steady_clock::now();
   }
 
+  ~SimNode() { stopVisca(); }
+
   int run() {
     const int max_frames = p_.getInt("frames");
     const double duration_s = p_.getDouble("duration_s");
+    // The cameras answer on their own thread, as real ones do, not between two renders.
+    if (visca_) visca_thread_ = std::thread([this] { serveVisca(); });
     for (int64_t n = 0; !StopFlag::stopRequested(); ++n) {
       const double t_frame = n * frame_period_s_;
       if ((max_frames > 0 && n >= max_frames) || (duration_s > 0 && t_frame > duration_s)) break;
@@ -97,8 +104,11 @@ class SimNode {
       }
       publishFrame();
       if (lockstep_) awaitAnswer(n);
+      reportVisca();
       status_.maybePublish();
     }
+    stopVisca();
+    reportVisca();
     status_.publishNow();
     std::printf("ptz-sim: %lld frames published, %lld setpoints applied\n",
                 static_cast<long long>(status_.counter("frames_published")),
@@ -116,6 +126,7 @@ class SimNode {
 
   // Advances the motors to t_s, publishing PTZ_STATE at every state period on the way.
   void advanceWithStates(double t_s) {
+    const std::lock_guard<std::mutex> lock(sim_mutex_);
     while (next_state_t_ <= t_s) {
       sim_->advanceTo(next_state_t_);
       publishState();
@@ -132,7 +143,6 @@ class SimNode {
         // Setpoints that arrived meanwhile act now, even when the frames run late.
         while (lcm_->handleTimeout(0) > 0) {
         }
-        if (visca_) waitForInput(0);
         if (now - t_frame > frame_period_s_) {
           status_.increment("frames_skipped_late");
           return false;
@@ -150,29 +160,38 @@ class SimNode {
     }
   }
 
-  // LCM messages, and VISCA datagrams when the heads are VISCA cameras.
-  void waitForInput(int timeout_ms) {
-    if (!visca_) {
-      lcm_->handleTimeout(timeout_ms);
-      return;
+  void waitForInput(int timeout_ms) { lcm_->handleTimeout(timeout_ms); }
+
+  // The VISCA cameras: every datagram is answered as it comes, with the motors at that moment.
+  void serveVisca() {
+    while (!visca_quit_) {
+      pollfd fds[2] = {{visca_->fd(Side::kLeft), POLLIN, 0}, {visca_->fd(Side::kRight), POLLIN, 0}};
+      if (::poll(fds, 2, 20) <= 0) continue;
+      const std::lock_guard<std::mutex> lock(sim_mutex_);
+      const double t_apply = std::max(sim_->time(), realtimeNow());
+      sim_->advanceTo(t_apply);
+      const std::array<PtzPose, 2> now = {sim_->plant().pose(Side::kLeft),
+                                          sim_->plant().pose(Side::kRight)};
+      if (visca_->serve(now, &visca_setpoints_)) {
+        int clamped = 0, rejected = 0;
+        sim_->command(t_apply, visca_setpoints_[0], visca_setpoints_[1], &clamped, &rejected);
+        ++visca_setpoints_applied_;
+      }
+      visca_packets_ = visca_->packets();
+      visca_malformed_ = visca_->malformed();
     }
-    pollfd fds[3] = {{lcm_->getFileno(), POLLIN, 0},
-                     {visca_->fd(Side::kLeft), POLLIN, 0},
-                     {visca_->fd(Side::kRight), POLLIN, 0}};
-    if (::poll(fds, 3, timeout_ms) <= 0) return;
-    if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
-    if (!((fds[1].revents | fds[2].revents) & POLLIN)) return;
-    const double t_apply = std::max(sim_->time(), realtimeNow());
-    advanceWithStates(t_apply);
-    const std::array<PtzPose, 2> now = {sim_->plant().pose(Side::kLeft),
-                                        sim_->plant().pose(Side::kRight)};
-    if (visca_->serve(now, &visca_setpoints_)) {
-      int clamped = 0, rejected = 0;
-      sim_->command(t_apply, visca_setpoints_[0], visca_setpoints_[1], &clamped, &rejected);
-      status_.increment("visca_setpoints_applied");
-    }
-    status_.setCounter("visca_packets", visca_->packets());
-    status_.setCounter("visca_malformed", visca_->malformed());
+  }
+
+  void stopVisca() {
+    visca_quit_ = true;
+    if (visca_thread_.joinable()) visca_thread_.join();
+  }
+
+  void reportVisca() {
+    if (!visca_) return;
+    status_.setCounter("visca_packets", visca_packets_);
+    status_.setCounter("visca_malformed", visca_malformed_);
+    status_.setCounter("visca_setpoints_applied", visca_setpoints_applied_);
   }
 
   void publishState() {
@@ -185,7 +204,14 @@ class SimNode {
   }
 
   void publishFrame() {
-    const SimFrame frame = sim_->capture();
+    SimFrame frame;
+    ptzstereo::sim_truth_t truth;
+    {  // the instant of capture; the motors may move on while it renders
+      const std::lock_guard<std::mutex> lock(sim_mutex_);
+      frame = sim_->snapshot();
+      truth = makeTruthMessage(*sim_, frame, simUtime(frame.t_s));
+    }
+    sim_->render(&frame);
     current_frame_t_ = frame.t_s;
     const int64_t utime = simUtime(frame.t_s);
     ptzstereo::stereo_frame_t msg =
@@ -195,7 +221,6 @@ class SimNode {
     lcm_->publish(ch_frame_, &msg);
     status_.countOut(ch_frame_, lockstep_ ? -1 : (now - utime) / 1000.0);
     status_.increment("frames_published");
-    ptzstereo::sim_truth_t truth = makeTruthMessage(*sim_, frame, utime);
     truth.publish_utime = wallUtime();
     lcm_->publish(ch_truth_, &truth);
     status_.countOut(ch_truth_, -1);
@@ -268,6 +293,12 @@ class SimNode {
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
   std::unique_ptr<ViscaServer> visca_;
   std::array<PtzPose, 2> visca_setpoints_{PtzPose{0, 0, 1}, PtzPose{0, 0, 1}};
+  // The motors are shared with the VISCA thread (visca_port): while it runs, every use of the plant
+  // holds sim_mutex_; the renderers are the main thread's alone.
+  std::mutex sim_mutex_;
+  std::thread visca_thread_;
+  std::atomic<bool> visca_quit_{false};
+  std::atomic<int64_t> visca_packets_{0}, visca_malformed_{0}, visca_setpoints_applied_{0};
   int64_t start_wall_utime_ = 0;
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;

@@ -12,11 +12,22 @@ Simulator::Simulator(StereoRig rig, Scene scene, const PtzPlant::Params& plant, 
       noise_(rig_.left.width, rig_.left.height, noise_sigma, seed) {}
 
 SimFrame Simulator::capture() {
+  SimFrame f = snapshot();
+  render(&f);
+  return f;
+}
+
+SimFrame Simulator::snapshot() {
   SimFrame f;
   f.index = next_index_++;
   f.t_s = plant_.time();
   f.left_pose = plant_.pose(Side::kLeft);
   f.right_pose = plant_.pose(Side::kRight);
+  return f;
+}
+
+void Simulator::render(SimFrame* frame) {
+  SimFrame& f = *frame;
   const CameraView left = rig_.view(Side::kLeft, f.left_pose);
   const CameraView right = rig_.view(Side::kRight, f.right_pose);
   // The two cameras on two cores: the frame is out sooner (the render is the sim's readout
@@ -29,7 +40,6 @@ SimFrame Simulator::capture() {
       noise_.apply(static_cast<uint64_t>(f.index), camera, image);
     }
   });
-  return f;
 }
 
 void Simulator::command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped,

@@ -27,6 +27,10 @@ class Simulator {
 
   // Renders both cameras at the current sim time and the current motor state.
   SimFrame capture();
+  // The same in two steps, so that the motors may move on while the images render (ptz-sim's
+  // VISCA thread): the frame's time, index and poses; then its images from those.
+  SimFrame snapshot();
+  void render(SimFrame* frame);
   // A setpoint issued at sim time t_s (takes effect after the dead time).
   void command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped, int* rejected);
   void advanceTo(double t_s) { plant_.advanceTo(t_s); }
