@@ -35,6 +35,7 @@ struct Watch {
   int64_t states = 0;
   std::map<std::string, int64_t> counters;  // ptz-driver's status
   int64_t statuses = 0;
+  std::string message;  // of the last status
   void onState(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::ptz_state_t* m) {
     state = *m;
     ++states;
@@ -42,6 +43,7 @@ struct Watch {
   void onStatus(const lcm::ReceiveBuffer*, const std::string&,
                 const ptzstereo::process_status_t* m) {
     for (const auto& c : m->counters) counters[c.name] = c.value;
+    message = m->message;
     ++statuses;
   }
 };
@@ -216,4 +218,61 @@ TEST(SerialLoop, PelcoDBusWithoutQueriesReportsTheEstimate) {
   const auto& got = heads.bus.received();
   ASSERT_GE(got.size(), 6u);
   EXPECT_EQ(got[0], pelco_d::setPanPosition(1, 0));  // home first
+}
+
+// The adapter unplugged while the driver runs, then plugged back in as another tty (its
+// /dev/serial/by-id/ link re-pointed): the status names the device and the next attempt, the
+// driver reopens it by itself and the heads follow setpoints again.
+TEST(SerialLoop, AnAdapterPluggedBackIsReopenedAndTheHeadsFollowAgain) {
+  const std::string model_path = kConfig + "visca/sony_evi_d70.yaml";
+  const ViscaModel model = ViscaModel::load(model_path);
+  ViscaChainEmulator chain(model, ptz::defaultPlantParams(), 2);
+  ViscaChainEmulator plugged_back(model, ptz::defaultPlantParams(), 2);  // outlives the servers
+  auto pty = std::make_unique<ptz::test::PtyPair>();
+  ptz::test::DeviceLink link(pty->path());
+  auto server = std::make_unique<ptz::test::SerialServer<ViscaChainEmulator>>(*pty, &chain);
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  Watch w;
+  lcm.subscribe("PTZ_STATE", &Watch::onState, &w);
+  lcm.subscribe("PROCESS_STATUS_PTZ_DRIVER", &Watch::onStatus, &w);
+  ChildProcess driver({PTZ_DRIVER_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                       kConfig + "driver_visca_serial.yaml", "--visca-model", model_path,
+                       "--left-serial-device", link.path(), "--right-serial-device", link.path()});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return w.states >= 5; }, 15s))
+      << "no PTZ_STATE from the driver";
+
+  server.reset();
+  pty->hangUp();
+  link.remove();
+  const std::string device = "serial device '" + link.path() + "'";
+  EXPECT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return w.message.find(device + " does not exist") == 0; }, 10s))
+      << "status: " << w.message;
+  EXPECT_NE(w.message.find(", reopening in "), std::string::npos) << w.message;
+  EXPECT_EQ(w.counters["head_errors"], 1);
+  EXPECT_EQ(w.counters["head_reopens"], 0);
+
+  pty = std::make_unique<ptz::test::PtyPair>();
+  server = std::make_unique<ptz::test::SerialServer<ViscaChainEmulator>>(*pty, &plugged_back);
+  link.pointTo(pty->path());
+  const ptz::PtzPose left{0.5, 0.1, 2.0}, right{-0.4, 0.05, 3.0};
+  const double angle = 2 / model.pan_units_per_rad;
+  EXPECT_TRUE(holdSetpoint(
+      lcm, left, right,
+      [&] {
+        return w.counters["head_reopens"] == 1 && near(w.state->left, left, angle, 0.01) &&
+               near(w.state->right, right, angle, 0.01);
+      },
+      20s))
+      << "reopens " << w.counters["head_reopens"] << ", status: " << w.message;
+  EXPECT_EQ(w.counters["head_errors"], 1);
+  EXPECT_TRUE(server->waitFor(
+      [](ViscaChainEmulator& e) {
+        return e.received().size() >= 2 && e.received()[0] == visca::addressSet() &&
+               e.received()[1] == visca::ifClear();
+      },
+      2s))
+      << "the chain is addressed again";
+  EXPECT_EQ(driver.stop(), 0);
 }

@@ -30,12 +30,14 @@ class PelcoSerial : public ::testing::Test {
  protected:
   PelcoModel model = PelcoModel::load(kGeneric);
   PtyPair pty;
-  std::shared_ptr<PelcoDLine> line = std::make_shared<PelcoDLine>(pty.path(), 2400, "pelco_baud");
+  ptz::test::DeviceLink link{pty.path()};  // the path the heads open
+  PtyPair* wire = &pty;                    // where the heads are plugged in now
+  std::shared_ptr<PelcoDLine> line = std::make_shared<PelcoDLine>(link.path(), 2400, "pelco_baud");
   ptz::PtzPlant::Params plant = ptz::defaultPlantParams();
 
   // Reads until `count` whole frames came from the heads.
   std::vector<Bytes> frames(size_t count) {
-    const Bytes b = pty.readUntil([count](const Bytes& all) { return all.size() >= 7 * count; });
+    const Bytes b = wire->readUntil([count](const Bytes& all) { return all.size() >= 7 * count; });
     std::vector<Bytes> out;
     for (size_t i = 0; i + 7 <= b.size(); i += 7)
       out.emplace_back(b.begin() + i, b.begin() + i + 7);
@@ -45,7 +47,7 @@ class PelcoSerial : public ::testing::Test {
   std::vector<Bytes> serve(PelcoDBusEmulator& bus, size_t count, double now_s) {
     auto in = frames(count);
     EXPECT_EQ(in.size(), count);
-    for (const Bytes& f : in) pty.write(bus.feed(f.data(), f.size(), now_s));
+    for (const Bytes& f : in) wire->write(bus.feed(f.data(), f.size(), now_s));
     return in;
   }
   bool read(PtzHead& h, double now_s, const std::function<bool()>& done) {
@@ -303,4 +305,88 @@ TEST_F(PelcoSerial, WithoutQueriesAStopDuringHomingLeavesThePoseUnknownUntilHome
   head.inquire(12.0, 0.1);
   ASSERT_TRUE(head.measured());
   EXPECT_EQ(head.measured()->pan_rad, 0.0);
+}
+
+// The RS-485 adapter unplugged and plugged back (its link re-pointed to the new tty): the line
+// opens it again after the back-off and the head starts over. A head that answers queries is
+// measured again; one without has lost its position (it may have been moved, or powered off
+// and homed itself): unknown until sent home again, as after a stop during homing.
+TEST_F(PelcoSerial, AfterAReopenWithQueriesThePoseIsMeasuredAgain) {
+  const std::vector<Bytes> pose = {pelco_d::setPanPosition(1, model.panCentideg(0.5)),
+                                   pelco_d::setTiltPosition(1, model.tiltCentideg(0.2)),
+                                   pelco_d::setZoomPosition(1, model.zoom.position(4.0))};
+  PelcoDBusEmulator bus(model, plant, {1}, true);
+  PelcoDHead head(model, line, 1, true, plant);
+  head.start(0);
+  measure(head, bus, 0);
+  ASSERT_TRUE(head.measured());
+  head.inquire(0.1, 0.5);  // asked just before the unplugging: never answered
+  ASSERT_EQ(frames(1).size(), 1u);
+  pty.hangUp();
+  head.receive(0.2);
+  EXPECT_EQ(head.stats().errors, 1);
+  EXPECT_EQ(head.stats().last_error,
+            "serial device '" + link.path() + "' hung up (adapter unplugged?), reopening in 0.5 s");
+  PtyPair plugged_back;
+  link.pointTo(plugged_back.path());
+  wire = &plugged_back;
+  head.receive(0.69);
+  EXPECT_EQ(head.stats().reopens, 0) << "not before the back-off";
+  head.receive(0.7);
+  EXPECT_EQ(head.stats().reopens, 1);
+  EXPECT_FALSE(head.measured()) << "until answered again";
+  // The round starts over with the pan query (not the tilt query after the lost answer).
+  head.inquire(0.8, 0.5);
+  EXPECT_EQ(serve(bus, 1, 0.8), std::vector<Bytes>{pelco_d::queryPan(1)});
+  ASSERT_TRUE(read(head, 0.8, [&] { return head.stats().replies == 4; }));
+  EXPECT_FALSE(head.measured());
+  for (int i = 5; i <= 6; ++i) {
+    head.inquire(0.8, 0.5);
+    serve(bus, 1, 0.8);
+    ASSERT_TRUE(read(head, 0.8, [&] { return head.stats().replies == i; }));
+  }
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measuredAtS(), 0.8);
+  head.command({0.5, 0.2, 4.0}, 0.9);
+  EXPECT_EQ(serve(bus, 3, 0.9), pose);
+  EXPECT_EQ(head.stats().malformed, 0);
+}
+
+TEST_F(PelcoSerial, AfterAReopenWithoutQueriesThePoseIsUnknownUntilHomedAgain) {
+  const std::vector<Bytes> pose = {pelco_d::setPanPosition(1, model.panCentideg(0.5)),
+                                   pelco_d::setTiltPosition(1, model.tiltCentideg(0.2)),
+                                   pelco_d::setZoomPosition(1, model.zoom.position(4.0))};
+  PelcoDBusEmulator bus(model, plant, {1}, false);
+  PelcoDHead head(model, line, 1, false, plant);
+  const std::vector<Bytes> home = {pelco_d::setPanPosition(1, 0), pelco_d::setTiltPosition(1, 0),
+                                   pelco_d::setZoomPosition(1, 0)};
+  head.start(0);
+  EXPECT_EQ(serve(bus, 3, 0), home);
+  head.inquire(3.0, 0.1);
+  ASSERT_TRUE(head.measured());  // homed (2.333 s)
+  pty.hangUp();
+  head.receive(3.0);
+  EXPECT_EQ(head.stats().errors, 1);
+  const int64_t sent = head.stats().sent;
+  head.command({0.5, 0.2, 4.0}, 3.1);
+  EXPECT_EQ(head.stats().sent, sent) << "nothing goes out meanwhile";
+  PtyPair plugged_back;
+  link.pointTo(plugged_back.path());
+  wire = &plugged_back;
+  head.receive(3.5);
+  EXPECT_EQ(head.stats().reopens, 1);
+  head.inquire(3.5, 0.1);
+  EXPECT_FALSE(head.measured()) << "where it is now is unknown";
+  // The driver asks it to find its position: home, and the estimate once it must be there.
+  PtzHead& as_driver = head;
+  as_driver.findPosition(3.6);
+  EXPECT_EQ(serve(bus, 3, 3.6), home);
+  head.inquire(5.9, 0.1);
+  EXPECT_FALSE(head.measured()) << "the homing takes 2.333 s";
+  head.inquire(5.94, 0.1);
+  ASSERT_TRUE(head.measured());
+  EXPECT_EQ(head.measured()->pan_rad, 0.0);
+  head.command({0.5, 0.2, 4.0}, 6.0);
+  EXPECT_EQ(serve(bus, 3, 6.0), pose);
+  EXPECT_EQ(head.stats().errors, 1);
 }

@@ -1,11 +1,14 @@
 // The serial port of the serial heads (raw 8N1 through a pseudo-terminal), and what the
 // serial backends make of their parameters: errors that name the parameter and the device,
-// one line shared when both heads name the same device.
+// one line shared when both heads name the same device, the back-off of a line reopening its
+// port.
 #include <gtest/gtest.h>
 
 #include "ptz/plant.hpp"
+#include "ptz_driver/backoff.hpp"
 #include "ptz_driver/head_book.hpp"
 #include "ptz_driver/head_factory.hpp"
+#include "ptz_driver/serial_line.hpp"
 #include "ptz_driver/serial_port.hpp"
 #include "support/pty_pair.hpp"
 
@@ -117,4 +120,57 @@ TEST(SerialBackends, TheRightCameraIsAddressTwoOnASharedLineAndOneOnItsOwn) {
     EXPECT_EQ(packets[0],
               (Bytes{static_cast<uint8_t>(shared ? 0x82 : 0x81), 0x09, 0x06, 0x12, 0xFF}));
   }
+}
+
+TEST(Backoff, WaitsHalfASecondThenDoublesUpToEightAndStartsOverAfterASuccess) {
+  ptz::driver::Backoff b(0.5, 8.0);
+  EXPECT_TRUE(b.due(0)) << "the first attempt at once";
+  std::vector<double> waits;
+  double t = 0;
+  for (int i = 0; i < 6; ++i) {
+    waits.push_back(b.failed(t));
+    t += waits.back();
+    EXPECT_FALSE(b.due(t - 0.125));
+    EXPECT_TRUE(b.due(t));
+  }
+  EXPECT_EQ(waits, (std::vector<double>{0.5, 1, 2, 4, 8, 8}));
+  b.succeeded();
+  EXPECT_EQ(b.failed(t), 0.5);
+}
+
+// The adapter unplugged and its device path gone: the line tries to open it again after 0.5,
+// 1, 2, 4, 8, 8 s, saying when; the outage is one error; once it is back the line is open.
+TEST(SerialLine, AFailedPortIsOpenedAgainWithBackOffAndSaysWhen) {
+  auto pty = std::make_unique<PtyPair>();
+  ptz::test::DeviceLink link(pty->path());
+  ptz::driver::PelcoDLine line(link.path(), 2400, "pelco_baud");
+  ptz::driver::HeadBook book;
+  const std::string device = "serial device '" + link.path() + "'";
+  pty->hangUp();
+  link.remove();
+  line.pump(&book, 100);
+  EXPECT_EQ(line.fd(), -1);
+  EXPECT_EQ(line.problem(100), device + " hung up (adapter unplugged?), reopening in 0.5 s");
+  std::string why = device + " hung up (adapter unplugged?)";
+  double t = 100.5;
+  for (const double wait : {1.0, 2.0, 4.0, 8.0, 8.0}) {
+    line.pump(&book, t - 0.125);
+    EXPECT_EQ(line.problem(t - 0.125), why + ", reopening in 0.1 s") << "not yet at " << t;
+    line.pump(&book, t);
+    why = device + " does not exist (adapter unplugged? see ls /dev/serial/by-id/)";
+    EXPECT_EQ(line.problem(t), why + ", reopening in " + ptz::driver::secondsText(wait))
+        << "at " << t;
+    t += wait;
+  }
+  EXPECT_EQ(book.stats().errors, 1) << "one outage, one error";
+  EXPECT_EQ(line.reopens(), 0);
+  pty = std::make_unique<PtyPair>();  // plugged back
+  link.pointTo(pty->path());
+  line.pump(&book, t);
+  EXPECT_EQ(line.reopens(), 1);
+  EXPECT_EQ(book.stats().reopens, 1);
+  EXPECT_EQ(line.problem(t), "");
+  EXPECT_GE(line.fd(), 0);
+  EXPECT_TRUE(line.send({0xFF, 0x01, 0x00, 0x00, 0x00, 0x00, 0x01}));
+  EXPECT_EQ(pty->read(2000ms).size(), 7u);
 }

@@ -46,7 +46,7 @@ TEST_F(ViscaSerial, AnAddressTheChainDoesNotHaveIsAnError) {
   ASSERT_TRUE(read(0, [&] { return replies() == 2; }));
   EXPECT_EQ(left.stats().errors + right.stats().errors, 1);
   EXPECT_EQ(left.stats().last_error + right.stats().last_error,
-            "no camera at VISCA address 2 on " + pty.path() + ": Address Set found 1");
+            "no camera at VISCA address 2 on " + link.path() + ": Address Set found 1");
 }
 
 TEST_F(ViscaSerial, CommandsAreTheBytesAndTheMeasuredPoseFollowsTheMotors) {

@@ -1,5 +1,6 @@
 // Serial VISCA heads when things go wrong: camera errors by name, a silent camera, lost and
-// late replies, an unplugged adapter, garbage on the line, "command buffer full".
+// late replies, an unplugged adapter (and plugged back), garbage on the line, "command buffer
+// full".
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -102,11 +103,91 @@ TEST_F(ViscaSerial, AnUnpluggedAdapterIsOneNamedErrorAndTheProcessGoesOn) {
   left.receive(0.1);
   EXPECT_EQ(left.stats().errors, 1);
   EXPECT_EQ(left.stats().last_error,
-            "serial device '" + pty.path() + "' hung up (adapter unplugged?)");
+            "serial device '" + link.path() + "' hung up (adapter unplugged?), reopening in 0.5 s");
   EXPECT_EQ(right.stats().errors, 0) << "one line, one error";
   EXPECT_EQ(left.fd(), -1) << "no longer polled (was " << fd << ")";
   left.inquire(0.2, 0.1);  // writes fail quietly: nothing measured, nothing thrown
   EXPECT_FALSE(left.measured());
+}
+
+// The adapter comes back (udev points its /dev/serial/by-id/ link to the new tty): the line
+// opens it again after the back-off, the chain is addressed again, and the heads start over:
+// nothing of before is matched to a new reply, the position is measured again.
+TEST_F(ViscaSerial, AnAdapterPluggedBackIsReopenedAndTheHeadsStartOver) {
+  const std::vector<Bytes> chain_start = {visca::addressSet(), visca::ifClear()};
+  left.start(0);
+  right.start(0);
+  ASSERT_EQ(serve(2, 0), chain_start);
+  ASSERT_TRUE(read(0, [&] { return replies() == 2; }));
+  measure(left, 0);
+  ASSERT_TRUE(left.measured());
+  left.inquire(0.9, 0.1);  // asked just before the unplugging: its answer never comes
+  ASSERT_EQ(ptz::test::readViscaPackets(pty, 1).size(), 1u);
+
+  pty.hangUp();
+  left.receive(1.0);
+  right.receive(1.0);
+  const std::string device = "serial device '" + link.path() + "'";
+  EXPECT_EQ(left.stats().errors + right.stats().errors, 1);
+  EXPECT_EQ(left.stats().last_error, device + " hung up (adapter unplugged?), reopening in 0.5 s");
+  EXPECT_EQ(line->problem(1.2), device + " hung up (adapter unplugged?), reopening in 0.3 s");
+  EXPECT_EQ(left.problem(1.2), line->problem(1.2));
+  EXPECT_EQ(line->fd(), -1);
+  const int64_t sent = left.stats().sent + right.stats().sent;
+  left.command({0.5, 0.2, 4.0}, 1.1);
+  left.inquire(1.3, 0.1);
+  right.inquire(1.3, 0.1);
+  EXPECT_EQ(left.stats().sent + right.stats().sent, sent) << "nothing goes out meanwhile";
+
+  // Still unplugged at the first attempt (0.5 s after): the next waits 1 s.
+  link.remove();
+  left.receive(1.5);
+  EXPECT_EQ(line->problem(1.5),
+            device +
+                " does not exist (adapter unplugged? see ls /dev/serial/by-id/), "
+                "reopening in 1.0 s");
+  EXPECT_EQ(left.stats().errors + right.stats().errors, 1) << "one outage, one error";
+
+  // Plugged back in under another tty: not before the back-off, then at once.
+  ptz::test::PtyPair plugged_back;
+  link.pointTo(plugged_back.path());
+  wire = &plugged_back;
+  left.receive(2.4);
+  right.receive(2.4);
+  EXPECT_EQ(line->reopens(), 0);
+  EXPECT_EQ(line->fd(), -1);
+  left.receive(2.5);
+  right.receive(2.5);
+  EXPECT_EQ(line->reopens(), 1);
+  EXPECT_EQ(left.stats().reopens + right.stats().reopens, 1) << "one line, one reopen";
+  EXPECT_GE(line->fd(), 0);
+  EXPECT_EQ(line->problem(2.5), "");
+  EXPECT_FALSE(left.measured()) << "the position is measured again first";
+  EXPECT_FALSE(right.measured());
+  // The chain is addressed again, once for both heads.
+  const int64_t before = replies();
+  ASSERT_EQ(serve(2, 2.5), chain_start);
+  ASSERT_TRUE(read(2.5, [&] { return replies() == before + 2; }));
+  EXPECT_TRUE(plugged_back.read(std::chrono::milliseconds(0)).empty());
+
+  // Measured again: the answer is the new inquiry's, not the one lost with the old port's.
+  left.stats().round_trip_ms.clear();
+  measure(left, 2.6);
+  ASSERT_TRUE(left.measured());
+  EXPECT_DOUBLE_EQ(left.measuredAtS(), 2.6);
+  ASSERT_EQ(left.stats().round_trip_ms.size(), 1u);
+  EXPECT_EQ(left.stats().round_trip_ms[0], 0.0);
+  // And it follows commands.
+  left.command({0.5, 0.2, 4.0}, 2.7);
+  const auto commands = serve(2, 2.7);
+  ASSERT_EQ(commands.size(), 2u);
+  EXPECT_EQ(commands[0],
+            visca::panTiltAbsolute(1, model.pan_speed_max, model.tilt_speed_max,
+                                   model.panUnits(0.5), model.tiltUnits(0.2), model.pan_nibbles));
+  ASSERT_TRUE(read(2.7, [&] { return replies() == before + 2 + 2 + 4; }));  // ACKs, completions
+  EXPECT_EQ(left.stats().malformed + right.stats().malformed, 0);
+  EXPECT_EQ(left.stats().late_replies, 0);
+  EXPECT_EQ(left.stats().errors + right.stats().errors, 1);
 }
 
 TEST_F(ViscaSerial, GarbageIsCountedAndSkipped) {

@@ -180,7 +180,7 @@ class DriverNode {
 
   void report() {
     std::vector<double> rtt;
-    int64_t timeouts = 0, errors = 0, buffer_full = 0, malformed = 0, late = 0;
+    int64_t timeouts = 0, errors = 0, buffer_full = 0, malformed = 0, late = 0, reopens = 0;
     for (auto& h : heads_) {
       auto& s = h->stats();
       rtt.insert(rtt.end(), s.round_trip_ms.begin(), s.round_trip_ms.end());
@@ -189,6 +189,7 @@ class DriverNode {
       buffer_full += s.buffer_full;
       malformed += s.malformed;
       late += s.late_replies;
+      reopens += s.reopens;
       if (!s.last_error.empty()) log_.warn("head_error", "ptz-driver: head error: " + s.last_error);
     }
     rtt_ms_.insert(rtt_ms_.end(), rtt.begin(), rtt.end());
@@ -203,13 +204,18 @@ class DriverNode {
     status_.setCounter("head_buffer_full", buffer_full);
     status_.setCounter("head_malformed", malformed);
     status_.setCounter("head_late_replies", late);
+    status_.setCounter("head_reopens", reopens);
     const bool up = heads_[0]->measured() && heads_[1]->measured() &&
                     nowS() - std::min(heads_[0]->measuredAtS(), heads_[1]->measuredAtS()) < 1.0;
     const bool estimated = !heads_[0]->measuresPosition() || !heads_[1]->measuresPosition();
     status_.setCounter("position_estimated", estimated ? 1 : 0);
+    std::string problem;  // e.g. a serial port closed until its next reopen attempt
+    for (auto& h : heads_) {
+      if (problem.empty()) problem = h->problem(nowS());
+    }
     if (!up) {
       status_.setState(ptzstereo::process_status_t::STATE_ERROR,
-                       "no position replies from a head for 1 s");
+                       problem.empty() ? "no position replies from a head for 1 s" : problem);
     } else if (estimated) {
       status_.setState(ptzstereo::process_status_t::STATE_WARN,
                        "a head cannot report its position: PTZ_STATE is estimated");

@@ -56,16 +56,27 @@ void PelcoDHead::start(double now_s) {
 
 void PelcoDHead::sendHome(double now_s) {
   // Where the head is is unknown: send it home; the estimate holds once it must be there.
-  homing_stopped_ = false;
   book_.forgetSent();
   wanted_ = home(plant_);
-  sendCommands(now_s);
+  position_unknown_ = !sendCommands(now_s);  // the port closed: again at the next call
   line_->talked(address_);
   homed_at_s_ = now_s + homingTimeS(plant_);
 }
 
+void PelcoDHead::followReopen() {
+  if (line_->reopens() == line_reopens_) return;
+  line_reopens_ = line_->reopens();
+  book_.lostTrack();
+  wanted_.reset();
+  query_.reset();
+  next_query_.reset();
+  // Without queries nothing says where the head went meanwhile (moved by hand, power cycled).
+  if (!position_query_ && homed_at_s_ >= 0) position_unknown_ = true;
+}
+
 void PelcoDHead::command(const PtzPose& pose, double now_s) {
-  if (homing_stopped_) {  // where it is is unknown: home first, then the poses
+  followReopen();
+  if (position_unknown_) {  // where it is is unknown: home first, then the poses
     sendHome(now_s);
     return;
   }
@@ -74,7 +85,8 @@ void PelcoDHead::command(const PtzPose& pose, double now_s) {
 }
 
 void PelcoDHead::findPosition(double now_s) {
-  if (homing_stopped_) sendHome(now_s);
+  followReopen();
+  if (position_unknown_) sendHome(now_s);
 }
 
 void PelcoDHead::service(double now_s) {
@@ -98,7 +110,7 @@ void PelcoDHead::service(double now_s) {
   line_->talked(address_);
 }
 
-void PelcoDHead::sendCommands(double now_s) {
+bool PelcoDHead::sendCommands(double now_s) {
   const int pan = model_.panCentideg(wanted_->pan_rad);
   const int tilt = model_.tiltCentideg(wanted_->tilt_rad);
   const int zoom = model_.zoom.position(wanted_->zoom);
@@ -110,10 +122,11 @@ void PelcoDHead::sendCommands(double now_s) {
     const Bytes frame = a == HeadBook::kPan    ? pelco_d::setPanPosition(address_, pan)
                         : a == HeadBook::kTilt ? pelco_d::setTiltPosition(address_, tilt)
                                                : pelco_d::setZoomPosition(address_, zoom);
-    if (!send(frame)) return;
+    if (!send(frame)) return false;
     book_.sent(a, units[a]);
     if (!position_query_) estimate_[a].command(sinceStartS(now_s), as_taken[a]);
   }
+  return true;
 }
 
 void PelcoDHead::sendQuery(double now_s) {
@@ -134,7 +147,7 @@ bool PelcoDHead::stop(double now_s, double timeout_s) {
   next_query_.reset();  // nothing but the stop goes now
   if (!position_query_ && homed_at_s_ >= 0 && now_s < homed_at_s_) {
     // Stopped somewhere between where it was and home: where is unknown.
-    homing_stopped_ = true;
+    position_unknown_ = true;
   } else if (!position_query_) {  // the estimate stops where it has got to
     estimateTo(now_s);
     for (Pt1Axis& a : estimate_) a.command(sinceStartS(now_s), a.position());
@@ -159,6 +172,7 @@ bool PelcoDHead::stop(double now_s, double timeout_s) {
 }
 
 void PelcoDHead::inquire(double now_s, double timeout_s) {
+  followReopen();
   timeout_s_ = timeout_s;
   if (!position_query_) {
     estimateTo(now_s);
@@ -180,7 +194,8 @@ void PelcoDHead::receive(double now_s) {
 }
 
 void PelcoDHead::read(double now_s) {
-  line_->pump(&book_);
+  line_->pump(&book_, now_s);
+  followReopen();
   while (line_->nextUnrouted()) ++book_.stats().malformed;  // from an address nobody has
   while (const auto r = line_->next(address_)) {
     if (!query_ || r->command2 != kReplyOf[*query_]) {
@@ -209,7 +224,7 @@ std::optional<PtzPose> PelcoDHead::measured() const {
                    model_.tiltRad(book_.measuredUnits(HeadBook::kTilt)),
                    model_.zoom.ratio(book_.measuredUnits(HeadBook::kZoom))};
   }
-  if (homing_stopped_ || homed_at_s_ < 0 || estimate_at_s_ < homed_at_s_) {
+  if (position_unknown_ || homed_at_s_ < 0 || estimate_at_s_ < homed_at_s_) {
     return std::nullopt;  // still homing, or stopped before home
   }
   return PtzPose{estimate_[0].position(), estimate_[1].position(), estimate_[2].position()};

@@ -1,18 +1,8 @@
 #include "ptz_driver/source_supervisor.hpp"
 
 #include <algorithm>
-#include <cstdio>
 
 namespace ptz::driver {
-namespace {
-
-std::string seconds(double s) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.1f s", s);
-  return buf;
-}
-
-}  // namespace
 
 SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, SupervisorParams params,
                                    bool live)
@@ -20,12 +10,12 @@ SourceSupervisor::SourceSupervisor(std::string name, SourceFactory factory, Supe
       factory_(std::move(factory)),
       params_(params),
       live_(live),
-      delay_s_(params.retry_initial_s) {}
+      retry_(params.retry_initial_s, params.retry_max_s) {}
 
 void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, size_t max_frames) {
   if (state_ == State::kEnded) return;
   if (state_ == State::kWaiting) {
-    if (now_s < retry_at_s_) return;
+    if (!retry_.due(now_s)) return;
     source_ = factory_();
     state_ = State::kConnecting;
     attempt_start_s_ = now_s;
@@ -47,7 +37,7 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
       if (!had_frame_ && reconnects_ > 0) events_.push_back(name_ + ": frames again");
       had_frame_ = true;
       state_ = State::kStreaming;
-      delay_s_ = params_.retry_initial_s;  // it worked: the next failure starts over
+      retry_.succeeded();  // it worked: the next failure starts over
       continue;
     }
     if (r == FrameSource::Poll::kEnded) {
@@ -64,9 +54,9 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
   }
   if (!live_) return;  // a recording waiting for its next frame's time is not silent
   if (state_ == State::kStreaming && now_s - last_frame_s_ > params_.source_timeout_s) {
-    giveUp(now_s, "no frame for " + seconds(now_s - last_frame_s_));
+    giveUp(now_s, "no frame for " + secondsText(now_s - last_frame_s_));
   } else if (state_ == State::kConnecting && now_s - attempt_start_s_ > params_.open_timeout_s) {
-    giveUp(now_s, "no frame " + seconds(now_s - attempt_start_s_) + " after opening");
+    giveUp(now_s, "no frame " + secondsText(now_s - attempt_start_s_) + " after opening");
   }
 }
 
@@ -75,9 +65,7 @@ void SourceSupervisor::giveUp(double now_s, const std::string& why) {
   source_.reset();  // a real source leaves a reader blocked in its driver to finish by itself
   ++reconnects_;
   why_ = why;
-  retry_at_s_ = now_s + delay_s_;
-  events_.push_back(name_ + ": " + why + ", reconnecting in " + seconds(delay_s_));
-  delay_s_ = std::min(2 * delay_s_, params_.retry_max_s);
+  events_.push_back(name_ + ": " + why + ", reconnecting in " + secondsText(retry_.failed(now_s)));
   state_ = State::kWaiting;
 }
 
@@ -87,7 +75,8 @@ int64_t SourceSupervisor::overflowed() const {
 
 std::string SourceSupervisor::problem(double now_s) const {
   if (state_ == State::kWaiting && reconnects_ > 0) {
-    return name_ + ": " + why_ + ", reconnecting in " + seconds(std::max(0.0, retry_at_s_ - now_s));
+    return name_ + ": " + why_ + ", reconnecting in " +
+           secondsText(std::max(0.0, retry_.retryAtS() - now_s));
   }
   if (state_ == State::kConnecting && reconnects_ > 0) {
     return name_ + ": " + why_ + ", reconnecting (attempt " + std::to_string(reconnects_ + 1) + ")";

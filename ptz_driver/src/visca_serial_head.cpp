@@ -45,7 +45,17 @@ void ViscaSerialHead::start(double now_s) {
   }
 }
 
+void ViscaSerialHead::followReopen(double now_s) {
+  if (line_->reopens() == line_reopens_) return;
+  line_reopens_ = line_->reopens();
+  awaiting_.clear();  // their replies died with the old port: none is matched to a new request
+  sockets_.clear();
+  core_.lostTrack();
+  start(now_s);
+}
+
 void ViscaSerialHead::command(const PtzPose& pose, double now_s) {
+  followReopen(now_s);
   core_.command(pose, now_s, sender(now_s, true));
 }
 
@@ -54,6 +64,7 @@ bool ViscaSerialHead::stop(double now_s, double timeout_s) {
 }
 
 void ViscaSerialHead::inquire(double now_s, double timeout_s) {
+  followReopen(now_s);
   for (auto it = awaiting_.begin(); it != awaiting_.end();) {
     if (it->late() && now_s > it->late_until_s) {
       it = awaiting_.erase(it);  // its reply was lost indeed
@@ -72,7 +83,8 @@ void ViscaSerialHead::inquire(double now_s, double timeout_s) {
 }
 
 void ViscaSerialHead::receive(double now_s) {
-  line_->pump(&core_.book());
+  line_->pump(&core_.book(), now_s);
+  followReopen(now_s);
   while (const auto r = line_->nextUnrouted()) onBroadcast(*r);
   while (const auto r = line_->next(core_.address())) handle(*r, now_s);
   core_.continueRound(now_s, sender(now_s, true));

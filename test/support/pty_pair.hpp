@@ -6,7 +6,10 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <pty.h>
+#include <stdlib.h>
 #include <unistd.h>
+
+#include <cstdio>
 
 #include <chrono>
 #include <cstdint>
@@ -28,6 +31,9 @@ class PtyPair {
     }
     path_ = name;
     ::fcntl(master_, F_SETFL, ::fcntl(master_, F_GETFL) | O_NONBLOCK);
+    // Not inherited by a driver the test starts: hangUp() must close the last master.
+    ::fcntl(master_, F_SETFD, FD_CLOEXEC);
+    ::fcntl(slave_, F_SETFD, FD_CLOEXEC);
   }
   ~PtyPair() {
     if (master_ >= 0) ::close(master_);
@@ -76,6 +82,40 @@ class PtyPair {
  private:
   int master_ = -1, slave_ = -1;
   std::string path_;
+};
+
+// The device path a user passes (like a udev link /dev/serial/by-id/usb-FTDI_...): a symlink
+// to a pty's slave, re-pointed to another pty when the "adapter" is plugged back in.
+class DeviceLink {
+ public:
+  explicit DeviceLink(const std::string& target) {
+    char dir[] = "/tmp/ptz_serial_XXXXXX";
+    if (::mkdtemp(dir) == nullptr) throw std::runtime_error("mkdtemp failed");
+    dir_ = dir;
+    path_ = dir_ + "/ttyUSB0";
+    pointTo(target);
+  }
+  ~DeviceLink() {
+    remove();
+    ::rmdir(dir_.c_str());
+  }
+  DeviceLink(const DeviceLink&) = delete;
+  DeviceLink& operator=(const DeviceLink&) = delete;
+
+  const std::string& path() const { return path_; }
+  // Atomically, as udev does: the path never dangles half-way.
+  void pointTo(const std::string& target) {
+    const std::string next = path_ + ".next";
+    if (::symlink(target.c_str(), next.c_str()) != 0 ||
+        std::rename(next.c_str(), path_.c_str()) != 0) {
+      throw std::runtime_error("cannot point " + path_ + " to " + target);
+    }
+  }
+  // The adapter is gone: so is its link.
+  void remove() { ::unlink(path_.c_str()); }
+
+ private:
+  std::string dir_, path_;
 };
 
 // Splits VISCA bytes into packets at the terminator 0xFF.

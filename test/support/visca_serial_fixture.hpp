@@ -23,17 +23,19 @@ class ViscaSerial : public ::testing::Test {
  protected:
   driver::ViscaModel model = driver::ViscaModel::load(kD70);
   PtyPair pty;
+  DeviceLink link{pty.path()};  // the path the heads open, as a user's /dev/serial/by-id/...
+  PtyPair* wire = &pty;         // where the chain is plugged in now
   driver::ViscaChainEmulator chain{model, ptz::defaultPlantParams(), 2};
   std::shared_ptr<driver::ViscaSerialLine> line =
-      std::make_shared<driver::ViscaSerialLine>(pty.path(), 9600, "serial_baud");
+      std::make_shared<driver::ViscaSerialLine>(link.path(), 9600, "serial_baud");
   driver::ViscaSerialHead left{model, line, 1};
   driver::ViscaSerialHead right{model, line, 2};
 
   // The chain takes `packets` packets from the heads and answers them at now_s.
   std::vector<driver::Bytes> serve(size_t packets, double now_s) {
-    const auto in = ptz::test::readViscaPackets(pty, packets);
+    const auto in = ptz::test::readViscaPackets(*wire, packets);
     EXPECT_EQ(in.size(), packets);
-    for (const driver::Bytes& p : in) pty.write(chain.feed(p.data(), p.size(), now_s));
+    for (const driver::Bytes& p : in) wire->write(chain.feed(p.data(), p.size(), now_s));
     return in;
   }
   // The heads read at now_s until done() (at most 2 s).

@@ -15,6 +15,7 @@ namespace ptz::driver {
 struct HeadStats {
   int64_t sent = 0, replies = 0, errors = 0, timeouts = 0, buffer_full = 0, malformed = 0;
   int64_t late_replies = 0;           // replies to requests already counted in timeouts
+  int64_t reopens = 0;                // serial ports opened again after they failed
   std::vector<double> round_trip_ms;  // of position inquiries; cleared by whoever reads it
   std::string last_error;             // the last error the head reported, by name
 };
@@ -47,6 +48,12 @@ class PtzHead {
   // A descriptor that becomes readable when the head has sent something; -1 for none.
   virtual int fd() const = 0;
   virtual HeadStats& stats() = 0;
+  // What keeps the head from answering now, for the status (e.g. its serial port closed until
+  // the next reopen attempt); "" when nothing is known to be wrong.
+  virtual std::string problem(double now_s) const {
+    (void)now_s;
+    return "";
+  }
 };
 
 }  // namespace ptz::driver

@@ -24,6 +24,14 @@ class HeadBook {
   void sent(Axis a, int32_t units) { sent_[a] = units; }
   // A command was lost or refused: every axis goes again with the next command.
   void forgetSent() { sent_ = {}; }
+  // The link was down (a serial port reopened): nothing sent, measured or asked stands; the
+  // position is unknown until measured again. The stats stay.
+  void lostTrack() {
+    sent_ = {};
+    measured_ = {};
+    inquiry_sent_s_ = -1;
+    buffer_full_since_s_ = -1;
+  }
 
   // Whether the next inquiry round may start: none out, or the one out has waited timeout_s
   // (counted in stats().timeouts).

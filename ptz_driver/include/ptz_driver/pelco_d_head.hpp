@@ -11,6 +11,9 @@
 //     longest move home would have ended; a stop before then leaves the pose unknown until
 //     the head has been sent home again (by the next command or findPosition). Nothing
 //     confirms a command or the stop.
+// After the line's port was reopened (adapter unplugged and back) the query out and the
+// commands sent are forgotten and the pose is unknown until measured again (position_query)
+// or, estimated, until the head has been sent home again (as after a stop during homing).
 #pragma once
 
 #include <array>
@@ -48,12 +51,16 @@ class PelcoDHead : public PtzHead {
   bool measuresPosition() const override { return position_query_; }
   int fd() const override { return line_->fd(); }
   HeadStats& stats() override { return book_.stats(); }
+  std::string problem(double now_s) const override { return line_->problem(now_s); }
 
  private:
   // Sends what waits when the bus is free: the commands for the newest pose, or the next
   // position query, taking turns.
   void service(double now_s);
-  void sendCommands(double now_s);
+  // After a reopen of the line: forgets what was sent and asked; the pose is unknown.
+  void followReopen();
+  // False when a frame could not be sent (the port closed).
+  bool sendCommands(double now_s);
   void sendQuery(double now_s);
   void sendHome(double now_s);
   bool send(const Bytes& frame);
@@ -78,7 +85,8 @@ class PelcoDHead : public PtzHead {
   // Without position_query: pan, tilt, zoom as the plant model moves them, valid once homed.
   std::array<Pt1Axis, 3> estimate_;
   double start_s_ = 0, homed_at_s_ = -1, estimate_at_s_ = 0;
-  bool homing_stopped_ = false;  // stopped before home: where it is is unknown
+  bool position_unknown_ = false;  // stopped before home, or reopened: home first
+  int64_t line_reopens_ = 0;       // the line's reopens this head has followed
 };
 
 }  // namespace ptz::driver

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "ptz_driver/backoff.hpp"
 #include "ptz_driver/camera_source.hpp"
 
 namespace ptz::driver {
@@ -42,8 +43,8 @@ class SourceSupervisor {
   int64_t frames() const { return frames_; }
   int64_t overflowed() const;
   // When the next attempt starts (kWaiting) and the back-off after the next failure.
-  double retryAtS() const { return retry_at_s_; }
-  double nextDelayS() const { return delay_s_; }
+  double retryAtS() const { return retry_.retryAtS(); }
+  double nextDelayS() const { return retry_.nextDelayS(); }
   // What is wrong, for the status: "" while streaming, during the first connection and at a
   // clean end of file. E.g. "right source rtsp://x: no frame for 2.1 s, reconnecting in 1.0 s".
   std::string problem(double now_s) const;
@@ -59,8 +60,7 @@ class SourceSupervisor {
   bool live_;
   std::unique_ptr<FrameSource> source_;
   State state_ = State::kWaiting;
-  double retry_at_s_ = -1e300;  // the first step connects at once
-  double delay_s_;
+  Backoff retry_;  // the first step connects at once
   double attempt_start_s_ = 0, last_frame_s_ = 0;
   bool had_frame_ = false;  // in this connection
   int64_t reconnects_ = 0, frames_ = 0, overflowed_done_ = 0;

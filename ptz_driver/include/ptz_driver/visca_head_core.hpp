@@ -50,6 +50,12 @@ class ViscaHeadCore {
   // next command().
   void lost(Request what);
 
+  // The link was down: nothing sent, asked or measured stands (HeadBook::lostTrack).
+  void lostTrack() {
+    book_.lostTrack();
+    zoom_inquiry_due_ = false;
+  }
+
   std::optional<PtzPose> measured() const;
   double measuredAtS() const { return book_.measuredAtS(); }
   HeadStats& stats() { return book_.stats(); }

@@ -8,7 +8,9 @@
 // the commands to what the line and the camera take. A request unanswered for the timeout is
 // counted lost, but its reply may still come on a busy line: it stays in the FIFO, late, for
 // one more timeout, so a late reply is taken (and counted) as its own, never as the reply to a
-// newer request. The rest is ViscaHeadCore (shared with VISCA over IP).
+// newer request. After the line's port was reopened (adapter unplugged and back) the head starts
+// over: pending requests forgotten, Address Set and IF_Clear again, the position unknown until
+// answered again. The rest is ViscaHeadCore (shared with VISCA over IP).
 #pragma once
 
 #include <deque>
@@ -28,7 +30,8 @@ class ViscaSerialHead : public PtzHead {
   // The camera at `address` (1..7, as Address Set numbers the chain) on `line`.
   ViscaSerialHead(ViscaModel model, std::shared_ptr<ViscaSerialLine> line, int address);
 
-  // Once per line: Address Set (88 30 01 FF) and IF_Clear (88 01 00 01 FF), broadcast.
+  // Once per line (and after each reopen): Address Set (88 30 01 FF) and IF_Clear
+  // (88 01 00 01 FF), broadcast.
   void start(double now_s) override;
   void command(const PtzPose& pose, double now_s) override;
   // Sends the stops (whatever waits) until the camera acknowledges both, within timeout_s.
@@ -42,6 +45,7 @@ class ViscaSerialHead : public PtzHead {
   double measuredAtS() const override { return core_.measuredAtS(); }
   int fd() const override { return line_->fd(); }
   HeadStats& stats() override { return core_.stats(); }
+  std::string problem(double now_s) const override { return line_->problem(now_s); }
 
  private:
   using Request = ViscaHeadCore::Request;
@@ -51,6 +55,8 @@ class ViscaSerialHead : public PtzHead {
     double late_until_s = -1;  // >= 0: timed out (counted); its reply is taken until then
     bool late() const { return late_until_s >= 0; }
   };
+  // After a reopen of the line: forgets what was pending and measured, starts again.
+  void followReopen(double now_s);
   ViscaHeadCore::Send sender(double now_s, bool paced);
   void handle(const visca::Reply& r, double now_s);
   void onBroadcast(const visca::Reply& r);
@@ -61,6 +67,7 @@ class ViscaSerialHead : public PtzHead {
   std::shared_ptr<ViscaSerialLine> line_;
   std::deque<Pending> awaiting_;    // sent, in order: awaiting an ACK or an answer
   std::map<int, Pending> sockets_;  // ACKed commands by socket: awaiting their completion
+  int64_t line_reopens_ = 0;        // the line's reopens this head has followed
 };
 
 }  // namespace ptz::driver
