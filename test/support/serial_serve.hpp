@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <mutex>
 #include <thread>
 
@@ -37,19 +38,19 @@ class SerialServer {
   // to the emulator when the writer returns).
   template <class F>
   bool waitFor(F done, std::chrono::milliseconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (!with(done) && std::chrono::steady_clock::now() < deadline) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));  // polling, bounded
-    }
-    return with(done);
+    std::unique_lock<std::mutex> lock(mutex_);
+    return fed_.wait_for(lock, timeout, [&] { return done(*emulator_); });
   }
 
  private:
   void run() {
     while (running_) {
       const auto in = pty_.read(std::chrono::milliseconds(2));
-      std::lock_guard<std::mutex> lock(mutex_);
-      pty_.write(emulator_->feed(in.data(), in.size(), nowS()));
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        pty_.write(emulator_->feed(in.data(), in.size(), nowS()));
+      }
+      fed_.notify_all();  // waitFor looks again after every turn of the emulator
     }
   }
 
@@ -58,6 +59,7 @@ class SerialServer {
   std::chrono::steady_clock::time_point start_;
   std::atomic<bool> running_{true};
   std::mutex mutex_;
+  std::condition_variable fed_;
   std::thread thread_;
 };
 
