@@ -283,14 +283,15 @@ TEST(CameraNode, ParametersAreCheckedWithTheParameterNamed) {
 }
 
 TEST(CameraNode, TheExampleConfigsLoad) {
-  for (const char* name : {"camera_files.yaml", "camera_rtsp.yaml"}) {
+  for (const char* name : {"camera_files.yaml", "camera_rtsp.yaml", "camera_usb_trigger.yaml"}) {
     ptz::Params p("ptz-camera", "test");
     declareCameraParams(p);
     p.add("encoding", "raw", "declared by ptz-camera's main (transport)");
     p.add("jpeg_quality", 90, "", "declared by ptz-camera's main (transport)");
     p.parseConfigFile(std::string(PTZ_SOURCE_DIR) + "/config/" + name);
     const CameraConfig c = cameraConfigFrom(p);
-    EXPECT_EQ(c.pairer.tolerance_us, 15'000) << name;
+    EXPECT_EQ(c.pairer.tolerance_us, c.trigger.enabled() ? 5'000 : 15'000) << name;
     EXPECT_EQ(c.capture[0].width, 640) << name;
+    EXPECT_EQ(c.trigger.enabled(), std::string(name) == "camera_usb_trigger.yaml") << name;
   }
 }

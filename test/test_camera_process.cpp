@@ -252,3 +252,64 @@ TEST(CameraProcess, AReaderStillBlockedInItsDriverAtExitIsReportedAndSkipsTheSta
             std::string::npos)
       << "stderr: " << err;
 }
+
+TEST(CameraProcess, WithATriggerLineCamerasThatDoNotFollowItAreNamed) {
+  // Two free-running test cameras at 23 Hz, and trigger pulses at 30 Hz on a simulated chip:
+  // their frames sweep past the pulses, most far from any, so both sides are named and the
+  // status is ERROR, while the pulses go on.
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  CameraListener l;
+  lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
+  const std::string free_running =
+      "videotestsrc is-live=true ! video/x-raw,width=64,height=48,framerate=23/1 ! videoconvert "
+      "! appsink";
+  ChildProcess camera({PTZ_CAMERA_BIN, "--lcm-url", ptz::test::kTestUrl, "--left-source",
+                       free_running, "--right-source", free_running, "--trigger-chip", "sim",
+                       "--trigger-line", "4", "--trigger-rate-hz", "30", "--trigger-window-s",
+                       "0.003", "--no-pair-warn-s", "1.0", "--status-period-s", "0.1"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm,
+      [&] {
+        return l.message.find("left camera") != std::string::npos &&
+               l.message.find("right camera") != std::string::npos &&
+               l.counters["frames_left"] >= 20 && l.counters["frames_right"] >= 20;
+      },
+      20s))
+      << l.message;
+  EXPECT_EQ(l.state, ptzstereo::process_status_t::STATE_ERROR);
+  EXPECT_NE(l.message.find("answered no trigger pulse (none within 3.0 ms; median distance "),
+            std::string::npos)
+      << l.message;
+  EXPECT_NE(l.message.find("is it in external-trigger mode"), std::string::npos) << l.message;
+  // A 23 Hz camera lies within 3 ms of a 30 Hz pulse for about 6/33 of its frames.
+  for (const char* side : {"left", "right"}) {
+    const int64_t matched = l.counters[std::string("trigger_matched_") + side];
+    const int64_t unmatched = l.counters[std::string("trigger_unmatched_") + side];
+    EXPECT_LT(matched, unmatched) << side;
+  }
+  const int64_t pulses = l.counters["trigger_pulses"];
+  EXPECT_GT(pulses, 0);
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["trigger_pulses"] >= pulses + 15; }, 10s))
+      << "the pulses stopped at " << l.counters["trigger_pulses"];
+  EXPECT_EQ(camera.stop(), 0);
+  std::printf("trigger: %lld pulses, %lld missed periods; %s\n",
+              static_cast<long long>(l.counters["trigger_pulses"]),
+              static_cast<long long>(l.counters["trigger_missed_periods"]), l.message.c_str());
+}
+
+TEST(CameraProcess, ATriggerChipThatDoesNotExistExitsTwoNamingIt) {
+  const std::string command =
+      std::string("timeout 20 ") + PTZ_CAMERA_BIN +
+      " --lcm-url memq:// --left-source 0 --right-source 1"
+      " --trigger-chip /dev/gpiochip99 --trigger-line 17 2>&1; echo exit=$?";
+  std::string out;
+  FILE* f = popen(command.c_str(), "r");
+  char buf[512];
+  while (f && std::fgets(buf, sizeof buf, f)) out += buf;
+  if (f) pclose(f);
+  EXPECT_NE(out.find("parameter 'trigger_chip': cannot open GPIO chip '/dev/gpiochip99'"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("exit=2"), std::string::npos) << out;
+}

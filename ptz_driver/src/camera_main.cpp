@@ -8,6 +8,7 @@
 #include <cstdlib>
 
 #include "ptz/transport.hpp"
+#include "ptz_driver/gpio_fake.hpp"
 #include "ptz_driver/stereo_camera.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
@@ -54,7 +55,8 @@ class CameraNode {
         *lcm_, ch_state_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_state_t& m) { onState(ch, m); },
         kStateQueue);
-    camera_ = std::make_unique<StereoCamera>(config, std::move(factories));
+    if (config.trigger.enabled()) startTrigger(config.trigger);
+    camera_ = std::make_unique<StereoCamera>(config, std::move(factories), &pulses_);
   }
 
   int run() {
@@ -92,6 +94,21 @@ class CameraNode {
     return ms;
   }
 
+  // The pulses start before the cameras open: their first frames already answer one.
+  void startTrigger(const TriggerParams& t) {
+    if (t.chip == "sim") {
+      auto chip = std::make_unique<FakeGpio>(std::vector<FakeAxisSpec>{}, 0, 1e-4);
+      chip->useClock(gpioClockS);
+      chip->addOutput(t.line);
+      trigger_chip_ = std::move(chip);
+    } else {
+      trigger_chip_ = openGpiodChip(t.chip, "ptz-camera", "trigger_chip");
+    }
+    trigger_chip_->requestOutput(t.line, "trigger_line");
+    pulser_ = std::make_unique<TriggerPulser>(*trigger_chip_, t, pulses_, realPulseClock());
+    pulser_->start();
+  }
+
   void onState(const std::string& ch, const ptzstereo::ptz_state_t& m) {
     if (!camera_->onPtzState(m.utime, pose(m.left), pose(m.right))) {
       status_.countDropped(ch, "not_newer");
@@ -113,6 +130,11 @@ class CameraNode {
 
   void report(int64_t now) {
     for (const auto& [name, value] : camera_->counters()) status_.setCounter(name, value);
+    if (pulser_) {
+      status_.setCounter("trigger_pulses", pulses_.pulses());
+      status_.setCounter("trigger_missed_periods", pulser_->missedPeriods());
+      status_.setCounter("trigger_io_errors", trigger_chip_->ioErrors());
+    }
     if (wait_ms_.size() >= 30) {  // from the first frame of a pair arriving to its publication
       status_.setCounter("pair_wait_us_p50", std::llround(percentile(wait_ms_, 50) * 1000));
       status_.setCounter("pair_wait_us_p99", std::llround(percentile(wait_ms_, 99) * 1000));
@@ -140,6 +162,10 @@ class CameraNode {
   std::string ch_frame_, ch_state_;
   std::shared_ptr<FrameNotifier> notifier_ = std::make_shared<FrameNotifier>();
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;
+  // Destroyed after the camera that reads the pulses; the pulser leaves the line inactive.
+  std::unique_ptr<GpioLines> trigger_chip_;
+  TriggerLog pulses_;
+  std::unique_ptr<TriggerPulser> pulser_;
   std::unique_ptr<StereoCamera> camera_;
   int64_t seq_ = 0;
   std::vector<double> wait_ms_, ptz_wait_ms_;

@@ -40,6 +40,11 @@ FakeGpio::FakeGpio(std::vector<FakeAxisSpec> axes, double start_s, double subste
   }
 }
 
+void FakeGpio::addOutput(int offset) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  lines_[offset].output = true;
+}
+
 FakeGpio::Line& FakeGpio::line(int offset, const std::string& name) {
   const auto it = lines_.find(offset);
   if (it == lines_.end() || it->second.requested) {

@@ -32,14 +32,14 @@ constexpr double kQueueDelayS = 200e-6;
 
 class GpiodLines : public GpioLines {
  public:
-  GpiodLines(const std::string& chip, const std::string& consumer)
+  GpiodLines(const std::string& chip, const std::string& consumer, const std::string& param)
       : chip_name_(chip), consumer_(consumer) {
     errno = 0;
     chip_ = gpiod_chip_open_lookup(chip.c_str());
     if (!chip_) {
       const int e = errno;
       throw ConfigError(
-          "parameter 'gpio_chip': cannot open GPIO chip '" + chip + "': " +
+          "parameter '" + param + "': cannot open GPIO chip '" + chip + "': " +
           (e == 0 || e == ENOENT ? std::string("no such chip") : std::string(std::strerror(e))) +
           " (gpiodetect lists the chips of this machine)");
     }
@@ -147,8 +147,9 @@ double gpioClockS() {
   return clockS(CLOCK_MONOTONIC);
 }
 
-std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer) {
-  return std::make_unique<GpiodLines>(chip, consumer);
+std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer,
+                                         const std::string& param) {
+  return std::make_unique<GpiodLines>(chip, consumer, param);
 }
 
 }  // namespace ptz::driver

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace ptz::driver {
 namespace {
@@ -64,6 +65,7 @@ void declareCameraParams(Params& p) {
         "a live connection without a first frame this long is reopened (not files)");
   p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure");
   p.add("retry_max_s", 8.0, "s", "longest reconnection delay");
+  declareTriggerParams(p);
 }
 
 CameraConfig cameraConfigFrom(const Params& p) {
@@ -121,17 +123,24 @@ CameraConfig cameraConfigFrom(const Params& p) {
   c.ptz_history_s = p.getDouble("ptz_history_s");
   c.max_ptz_extrapolation_s = p.getDouble("max_ptz_extrapolation_s");
   c.max_rate_hz = p.getDouble("max_rate_hz");
+  c.trigger = triggerParamsFrom(p, {c.source[0].live(), c.source[1].live()});
   return c;
 }
 
-StereoCamera::StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories)
+StereoCamera::StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories,
+                           const TriggerLog* pulses)
     : config_(config),
       sources_{SourceSupervisor("left source " + config.source[0].text, std::move(factories[0]),
                                 config.supervisor, config.source[0].live()),
                SourceSupervisor("right source " + config.source[1].text, std::move(factories[1]),
                                 config.supervisor, config.source[1].live())},
       pairer_(config.pairer),
-      history_(config.ptz_history_s, config.max_ptz_extrapolation_s) {}
+      history_(config.ptz_history_s, config.max_ptz_extrapolation_s) {
+  if (config.trigger.enabled()) {
+    if (!pulses) throw std::invalid_argument("StereoCamera: a trigger line without its pulses");
+    trigger_.emplace(*pulses, config.trigger.windowUs(), config.pairer.no_pair_warn_s);
+  }
+}
 
 bool StereoCamera::onPtzState(int64_t utime, const PtzPose& left, const PtzPose& right) {
   return history_.add(utime, left, right);
@@ -151,6 +160,11 @@ std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
     sources_[s].step(static_cast<double>(now_utime) * 1e-6, &frames, room);
     for (auto& f : frames) {
       if (f.resized) ++resized_[s];
+      if (trigger_) {
+        const auto pulse = trigger_->match(static_cast<Side>(s), f.capture_utime, now_utime);
+        if (!pulse) continue;
+        f.capture_utime = *pulse;
+      }
       pairer_.add(static_cast<Side>(s), std::move(f), now_utime);
     }
     if (!ended_[s] && sources_[s].state() == SourceSupervisor::State::kEnded) {
@@ -238,6 +252,11 @@ Health StereoCamera::health(int64_t now_utime, std::string* message) const {
   }
   const std::string no_pair = pairer_.noPairMessage(now_utime);
   if (!no_pair.empty()) errors.push_back(no_pair);
+  if (trigger_) {
+    bool error = false;
+    const std::string problem = trigger_->problem(now_utime, &error);
+    if (!problem.empty()) (error ? errors : warnings).push_back(problem);
+  }
   if (last_stale_) {
     warnings.push_back(
         "frames without a PTZ_STATE near their capture time: stamped with the nearest state "
@@ -271,6 +290,7 @@ std::map<std::string, int64_t> StereoCamera::counters() const {
   c["ptz_extrapolated"] = ptz_extrapolated_;
   c["ptz_history_restarts"] = history_.restarts();
   c["abandoned_readers"] = abandonedReaders();
+  if (trigger_) trigger_->addCounters(&c);
   return c;
 }
 

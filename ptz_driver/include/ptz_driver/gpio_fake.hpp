@@ -38,6 +38,8 @@ class FakeGpio : public GpioLines {
   void readEvents(std::vector<LineEvent>* events) override;
   int64_t ioErrors() const override;
 
+  // An output wired to nothing of the simulation, only watched (a camera trigger line).
+  void addOutput(int line);
   // Moves the simulation on to t_s with the outputs as they are.
   void advanceTo(double t_s);
   // With a clock, every call above first advances to clock() (a head on the wall clock).

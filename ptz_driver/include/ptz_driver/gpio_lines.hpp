@@ -41,8 +41,9 @@ class GpioLines {
 };
 
 // Opens a chip by name ("gpiochip0"), number ("0"), path ("/dev/gpiochip0") or label; throws
-// ConfigError naming the chip when there is no such GPIO chip. `consumer` labels the lines the
-// kernel hands out (gpioinfo shows it).
-std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer);
+// ConfigError naming the chip and `param` (the parameter that chose it) when there is no such
+// GPIO chip. `consumer` labels the lines the kernel hands out (gpioinfo shows it).
+std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer,
+                                         const std::string& param = "gpio_chip");
 
 }  // namespace ptz::driver

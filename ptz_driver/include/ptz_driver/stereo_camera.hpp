@@ -16,6 +16,7 @@
 #include "ptz_driver/ptz_history.hpp"
 #include "ptz_driver/source_supervisor.hpp"
 #include "ptz_driver/stereo_pairer.hpp"
+#include "ptz_driver/trigger.hpp"
 
 namespace ptz::driver {
 
@@ -26,6 +27,7 @@ struct CameraConfig {
   PairerParams pairer;
   double ptz_history_s = 2.0, max_ptz_extrapolation_s = 0.1;
   double max_rate_hz = 30.0;  // 0: every pair
+  TriggerParams trigger;      // a hardware trigger line, when enabled()
 };
 
 // Everything but the transport and the image encoding (lcm_url, encoding, jpeg_quality, ...).
@@ -45,8 +47,11 @@ enum class Health { kOk, kWarn, kError };
 
 class StereoCamera {
  public:
-  // factories: left, right (capture sources in ptz-camera, fakes in tests).
-  StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories);
+  // factories: left, right (capture sources in ptz-camera, fakes in tests). With a trigger,
+  // `pulses` are the pulses sent (it must outlive the camera): each frame is stamped with the
+  // pulse it answers, and a frame that answers none is not used.
+  StereoCamera(const CameraConfig& config, std::array<SourceFactory, 2> factories,
+               const TriggerLog* pulses = nullptr);
 
   // False (ignored) when not after the newest state (see PtzHistory::add).
   bool onPtzState(int64_t utime, const PtzPose& left, const PtzPose& right);
@@ -81,6 +86,7 @@ class StereoCamera {
   std::array<SourceSupervisor, 2> sources_;
   StereoPairer pairer_;
   PtzHistory history_;
+  std::optional<TriggerMatcher> trigger_;
   std::deque<Held> held_;  // waiting for their PTZ_STATE, oldest first
   std::array<bool, 2> ended_{false, false};
   std::array<int64_t, 2> resized_{0, 0};

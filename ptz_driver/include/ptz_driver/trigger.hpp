@@ -1,0 +1,123 @@
+// A hardware trigger line for a stereo pair: ptz-camera pulses one GPIO output at the frame rate,
+// both cameras (in external-trigger mode, wired to it) expose on the pulse's leading edge, and
+// each frame is stamped with the time of the pulse it answers. Both images of a pair then carry
+// the same capture time, exact to the pulse, whatever each camera's own transfer delay. A camera
+// that does not follow the pulses (not in trigger mode, not wired) is named, not paired.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "ptz/config.hpp"
+#include "ptz/rig.hpp"  // Side
+#include "ptz_driver/gpio_lines.hpp"
+
+namespace ptz::driver {
+
+struct TriggerParams {
+  std::string chip;  // empty: no trigger line
+  int line = -1;
+  double rate_hz = 30;
+  double pulse_s = 0.001;
+  bool active_low = false;
+  double window_s = 0;  // a frame this near a pulse answers it (0: a quarter of the period)
+  bool enabled() const { return !chip.empty(); }
+  int64_t windowUs() const;
+};
+
+void declareTriggerParams(Params& p);
+// Throws ConfigError naming the parameter. `live` says whether each source is a live camera:
+// recordings carry their own capture times and cannot be triggered.
+TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live);
+
+// The pulses sent, in wall-clock microseconds: written by the pulser's thread, read by the camera.
+class TriggerLog {
+ public:
+  explicit TriggerLog(size_t capacity = 1024) : capacity_(capacity) {}
+  void add(int64_t utime);  // in increasing order
+  // The pulse nearest to utime, and its signed distance (utime - pulse); nullopt before any.
+  struct Nearest {
+    int64_t pulse_utime = 0, offset_us = 0;
+  };
+  std::optional<Nearest> nearest(int64_t utime) const;
+  int64_t pulses() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::deque<int64_t> times_;
+  size_t capacity_;
+  int64_t pulses_ = 0;
+};
+
+// The clocks the pulser keeps; tests inject one whose sleeping moves simulated time.
+struct PulseClock {
+  std::function<double()> now_s;  // monotonic
+  std::function<void(double)> sleep_until_s;
+  std::function<int64_t()> wall_utime;  // what frames are stamped in
+};
+PulseClock realPulseClock();  // CLOCK_MONOTONIC (gpioClockS), clock_nanosleep, the wall clock
+
+// Drives the line: active for pulse_s at the start of every period, otherwise inactive. A period
+// whose start was missed by more than half a period (the machine was busy) is skipped and
+// counted rather than pulsed late, so that a late pulse is never taken for a frame's.
+class TriggerPulser {
+ public:
+  // The line must already be requested as an output of `lines`.
+  TriggerPulser(GpioLines& lines, const TriggerParams& params, TriggerLog& log, PulseClock clock);
+  ~TriggerPulser();
+  void start();  // on a thread of its own
+  void stop();   // joins it; the line is left inactive
+  // Pulses `periods` periods on the calling thread (tests with a simulated clock).
+  void run(int64_t periods);
+  int64_t missedPeriods() const { return missed_; }
+
+ private:
+  void period(int64_t k);
+  void drive(bool active);
+
+  GpioLines& lines_;
+  TriggerParams params_;
+  TriggerLog& log_;
+  PulseClock clock_;
+  double start_s_ = -1, period_s_;
+  int64_t next_ = 0;
+  std::atomic<int64_t> missed_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Which pulse each live frame answers: the nearest one, when its capture time (grab time minus
+// latency_s) lies within the window of it. Keeps what the status needs to say about each side.
+class TriggerMatcher {
+ public:
+  TriggerMatcher(const TriggerLog& log, int64_t window_us, double recent_s)
+      : log_(log), window_us_(window_us), recent_us_(static_cast<int64_t>(recent_s * 1e6)) {}
+  // The pulse's time, or nullopt (then the frame is not used): no pulse near, or the side's
+  // previous frame already answered that pulse.
+  std::optional<int64_t> match(Side side, int64_t capture_utime, int64_t now_utime);
+  // "" or, for a side whose recent frames mostly answered no pulse: "right camera: 3 of 46
+  // frames in the last 2.0 s within 8.3 ms of a trigger pulse (...)". error: most did not.
+  std::string problem(int64_t now_utime, bool* error) const;
+  void addCounters(std::map<std::string, int64_t>* counters) const;
+
+ private:
+  struct Seen {
+    int64_t arrival_utime, offset_us;
+    bool matched;
+  };
+  const TriggerLog& log_;
+  int64_t window_us_, recent_us_;
+  std::array<std::deque<Seen>, 2> recent_;
+  std::array<std::optional<int64_t>, 2> last_pulse_;
+  std::array<int64_t, 2> matched_{0, 0}, unmatched_{0, 0};
+};
+
+}  // namespace ptz::driver

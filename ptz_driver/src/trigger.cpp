@@ -1,0 +1,247 @@
+#include "ptz_driver/trigger.hpp"
+
+#include <time.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "ptz_driver/capture_source.hpp"  // wallClockUtime
+
+namespace ptz::driver {
+namespace {
+
+const std::array<const char*, 2> kSide = {"left", "right"};
+
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+std::string ms(double us) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f ms", us * 1e-3);
+  return buf;
+}
+
+}  // namespace
+
+int64_t TriggerParams::windowUs() const {
+  const double w = window_s > 0 ? window_s : 0.25 / rate_hz;
+  return std::llround(w * 1e6);
+}
+
+void declareTriggerParams(Params& p) {
+  p.add("trigger_chip", "",
+        "GPIO chip of a hardware trigger line for both cameras (name, number, /dev path or "
+        "label; sim: a simulated chip; empty: no trigger, frames paired by their own times)");
+  p.add("trigger_line", -1, "", "offset of the trigger output on trigger_chip");
+  p.add("trigger_rate_hz", 30.0, "Hz", "trigger pulses a second (the cameras' frame rate)");
+  p.add("trigger_pulse_s", 0.001, "s", "how long each pulse is active");
+  p.add("trigger_active_low", false, "pulses drive the line low (idle high)");
+  p.add("trigger_window_s", 0.0, "s",
+        "a frame whose capture time (grab time minus latency_s) is this near a pulse answers it "
+        "(0: a quarter of the period)");
+}
+
+TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live) {
+  TriggerParams t;
+  t.chip = p.getString("trigger_chip");
+  if (!t.enabled()) return t;
+  t.line = p.getInt("trigger_line");
+  t.rate_hz = p.getDouble("trigger_rate_hz");
+  t.pulse_s = p.getDouble("trigger_pulse_s");
+  t.active_low = p.getBool("trigger_active_low");
+  t.window_s = p.getDouble("trigger_window_s");
+  if (t.line < 0) {
+    throw ConfigError("parameter 'trigger_line' must be the offset of the trigger output on '" +
+                      t.chip + "', got " + std::to_string(t.line));
+  }
+  if (!std::isfinite(t.rate_hz) || t.rate_hz <= 0 || t.rate_hz > 1000) {
+    throw ConfigError("parameter 'trigger_rate_hz' must be > 0 and <= 1000, got " + num(t.rate_hz));
+  }
+  const double period_s = 1 / t.rate_hz;
+  if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s >= period_s) {
+    throw ConfigError("parameter 'trigger_pulse_s' must be > 0 and shorter than the period (" +
+                      num(period_s) + " s), got " + num(t.pulse_s));
+  }
+  if (!std::isfinite(t.window_s) || t.window_s < 0 || t.window_s >= period_s / 2) {
+    throw ConfigError("parameter 'trigger_window_s' must be >= 0 and below half the period (" +
+                      num(period_s / 2) + " s), got " + num(t.window_s));
+  }
+  for (size_t s = 0; s < 2; ++s) {
+    if (!live[s]) {
+      throw ConfigError("parameter 'trigger_chip' is set, but " + std::string(kSide[s]) +
+                        "_source is a recording: only live cameras can be triggered");
+    }
+  }
+  return t;
+}
+
+void TriggerLog::add(int64_t utime) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  times_.push_back(utime);
+  if (times_.size() > capacity_) times_.pop_front();
+  ++pulses_;
+}
+
+std::optional<TriggerLog::Nearest> TriggerLog::nearest(int64_t utime) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (times_.empty()) return std::nullopt;
+  auto it = std::lower_bound(times_.begin(), times_.end(), utime);
+  int64_t best = it == times_.end() ? times_.back() : *it;
+  if (it != times_.begin() && std::llabs(utime - *std::prev(it)) <= std::llabs(utime - best)) {
+    best = *std::prev(it);
+  }
+  return Nearest{best, utime - best};
+}
+
+int64_t TriggerLog::pulses() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return pulses_;
+}
+
+PulseClock realPulseClock() {
+  PulseClock c;
+  c.now_s = gpioClockS;
+  c.sleep_until_s = [](double t_s) {
+    timespec ts{};
+    ts.tv_sec = static_cast<time_t>(std::floor(t_s));
+    ts.tv_nsec = static_cast<long>((t_s - std::floor(t_s)) * 1e9);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    }
+  };
+  c.wall_utime = wallClockUtime;
+  return c;
+}
+
+TriggerPulser::TriggerPulser(GpioLines& lines, const TriggerParams& params, TriggerLog& log,
+                             PulseClock clock)
+    : lines_(lines),
+      params_(params),
+      log_(log),
+      clock_(std::move(clock)),
+      period_s_(1 / params.rate_hz) {
+  drive(false);
+}
+
+TriggerPulser::~TriggerPulser() {
+  stop();
+}
+
+void TriggerPulser::drive(bool active) {
+  lines_.set(params_.line, active != params_.active_low);
+}
+
+void TriggerPulser::start() {
+  stop_ = false;
+  thread_ = std::thread([this] {
+    while (!stop_) run(1);
+  });
+}
+
+void TriggerPulser::stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+  drive(false);
+}
+
+void TriggerPulser::run(int64_t periods) {
+  if (start_s_ < 0) start_s_ = clock_.now_s();
+  for (int64_t i = 0; i < periods; ++i) period(next_++);
+}
+
+void TriggerPulser::period(int64_t k) {
+  const double t_s = start_s_ + static_cast<double>(k) * period_s_;
+  clock_.sleep_until_s(t_s);
+  const double late_s = clock_.now_s() - t_s;
+  if (late_s > period_s_ / 2) {
+    // Too late to be told apart from the next period's pulse: this one is not sent.
+    ++missed_;
+    return;
+  }
+  drive(true);
+  // The edge's wall time, read at once after it.
+  log_.add(clock_.wall_utime());
+  clock_.sleep_until_s(t_s + params_.pulse_s);
+  drive(false);
+}
+
+std::optional<int64_t> TriggerMatcher::match(Side side, int64_t capture_utime, int64_t now_utime) {
+  const auto s = static_cast<size_t>(side);
+  const std::optional<TriggerLog::Nearest> n = log_.nearest(capture_utime);
+  const bool near = n && std::llabs(n->offset_us) <= window_us_;
+  // A pulse answers one frame: a second one near it is not the camera following the trigger.
+  const bool fresh = near && (!last_pulse_[s] || n->pulse_utime > *last_pulse_[s]);
+  auto& recent = recent_[s];
+  recent.push_back({now_utime, n ? n->offset_us : 0, fresh});
+  while (!recent.empty() && recent.front().arrival_utime < now_utime - recent_us_) {
+    recent.pop_front();
+  }
+  if (!fresh) {
+    ++unmatched_[s];
+    return std::nullopt;
+  }
+  ++matched_[s];
+  last_pulse_[s] = n->pulse_utime;
+  return n->pulse_utime;
+}
+
+std::string TriggerMatcher::problem(int64_t now_utime, bool* error) const {
+  std::string out;
+  *error = false;
+  for (size_t s = 0; s < 2; ++s) {
+    int64_t total = 0, matched = 0;
+    std::vector<double> distance_us;
+    for (const auto& seen : recent_[s]) {
+      if (seen.arrival_utime < now_utime - recent_us_) continue;
+      ++total;
+      matched += seen.matched ? 1 : 0;
+      distance_us.push_back(static_cast<double>(std::llabs(seen.offset_us)));
+    }
+    if (matched == total) continue;
+    const bool most_not = 2 * matched < total;
+    *error = *error || most_not;
+    char head[160];
+    std::snprintf(head, sizeof head,
+                  "%s camera: %lld of %lld frames in the last %.1f s answered no", kSide[s],
+                  static_cast<long long>(total - matched), static_cast<long long>(total),
+                  static_cast<double>(recent_us_) * 1e-6);
+    std::string m = std::string(head) + " trigger pulse (none within " +
+                    ms(static_cast<double>(window_us_)) + "; median distance " +
+                    ms(median(distance_us)) + ")";
+    if (most_not) {
+      m += ": is it in external-trigger mode and wired to the trigger line, and is latency_s its "
+           "delay from the pulse?";
+    }
+    out += (out.empty() ? "" : "; ") + m;
+  }
+  return out;
+}
+
+void TriggerMatcher::addCounters(std::map<std::string, int64_t>* counters) const {
+  for (size_t s = 0; s < 2; ++s) {
+    const std::string side = kSide[s];
+    (*counters)["trigger_matched_" + side] = matched_[s];
+    (*counters)["trigger_unmatched_" + side] = unmatched_[s];
+    std::vector<double> offsets_us;
+    for (const auto& seen : recent_[s]) {
+      if (seen.matched) offsets_us.push_back(static_cast<double>(seen.offset_us));
+    }
+    // How far after its pulse a frame's grab time minus latency_s falls: what to add to it.
+    if (!offsets_us.empty()) {
+      (*counters)["trigger_offset_us_p50_" + side] = std::llround(median(offsets_us));
+    }
+  }
+}
+
+}  // namespace ptz::driver
