@@ -4,8 +4,12 @@
 // in the status, and the parameters' checks.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <map>
 #include <random>
 
+#include "ptz_driver/capture_source.hpp"
 #include "ptz_driver/gpio_fake.hpp"
 #include "ptz_driver/stereo_camera.hpp"
 #include "ptz_driver/trigger.hpp"
@@ -52,7 +56,7 @@ struct Pulsing {
   explicit Pulsing(const TriggerParams& t) {
     chip.useClock([this] { return sim.now_s; });
     chip.addOutput(kLine);
-    chip.requestOutput(kLine, "trigger_line");
+    chip.requestOutput(kLine, "trigger_line", t.active_low);
     pulser = std::make_unique<TriggerPulser>(chip, t, log, sim.clock());
   }
 };
@@ -89,14 +93,15 @@ TEST(CameraTrigger, PulsesComeAtTheRateWithTheirWidthAndEachIsLogged) {
     EXPECT_EQ(n->pulse_utime, pulseUtime(k));
     EXPECT_EQ(n->offset_us, 5'000);
   }
-  // Nearest either way, the earlier on a tie.
+  // Nearest either way.
   EXPECT_EQ(p.log.nearest(pulseUtime(3) - 2'000)->pulse_utime, pulseUtime(3));
   EXPECT_EQ(p.log.nearest(pulseUtime(3) + 20'000)->pulse_utime, pulseUtime(4));
 }
 
 TEST(CameraTrigger, ActiveLowIdlesHighAndPulsesLow) {
   Pulsing p(trigger(true));
-  EXPECT_TRUE(p.chip.level(kLine));  // inactive from the start
+  EXPECT_TRUE(p.chip.level(kLine));  // inactive from the request on: no edge before the first
+  EXPECT_EQ(p.chip.tally(kLine).rising, 0);
   p.pulser->run(10);
   const FakeGpio::OutputTally tally = p.chip.tally(kLine);
   // Low 2 ms of each 33.3 ms period; the last period ends 2 ms after its pulse.
@@ -118,11 +123,13 @@ TEST(CameraTrigger, APeriodStartedTooLateIsSkippedAndCountedNotPulsedLate) {
   EXPECT_GT(std::llabs(p.log.nearest(pulseUtime(10))->offset_us), 16'000);
   EXPECT_EQ(p.log.nearest(pulseUtime(11))->offset_us, 0);
   EXPECT_EQ(p.log.nearest(pulseUtime(29))->offset_us, 0);
-  // Late by less than half a period: pulsed, and logged when it really happened.
+  // Late by less than half a period: pulsed, logged when it really happened, full width.
   p.sim.late_once_s = 0.004;
+  const double high_before_s = p.chip.tally(kLine).high_s;
   p.pulser->run(1);
   EXPECT_EQ(p.pulser->missedPeriods(), 1);
   EXPECT_EQ(p.log.nearest(pulseUtime(30))->offset_us, -4'000);
+  EXPECT_NEAR(p.chip.tally(kLine).high_s - high_before_s, 0.002, 2e-4);
 }
 
 TEST(CameraTrigger, FramesAreStampedWithTheirPulseAndPairExactly) {
@@ -207,8 +214,9 @@ TEST(CameraTrigger, ACameraThatDoesNotFollowThePulsesIsNamed) {
   EXPECT_EQ(camera.health(now, &message), Health::kError);
   EXPECT_EQ(message.find("left camera"), std::string::npos) << message;
   EXPECT_EQ(message.rfind("right camera: " + std::to_string(c.at("trigger_unmatched_right")) +
-                              " of 46 frames in the last 2.0 s answered no trigger pulse (none "
-                              "within 8.3 ms; median distance ",
+                              " of 46 frames in the last 2.0 s answered no trigger pulse (" +
+                              std::to_string(c.at("trigger_unmatched_right")) +
+                              " none within 8.3 ms, median distance ",
                           0),
             0u)
       << message;
@@ -236,9 +244,12 @@ TEST(CameraTrigger, AFrameWithoutItsPulseOrASecondForOnePulseIsNotUsed) {
   EXPECT_EQ(c.at("trigger_unmatched_left"), 2);
   std::string message;
   EXPECT_EQ(camera.health(pulseUtime(30), &message), Health::kWarn);
-  EXPECT_EQ(
-      message.rfind("left camera: 2 of 31 frames in the last 2.0 s answered no trigger pulse", 0),
-      0u)
+  // (and no PTZ_STATE: this test sends none)
+  EXPECT_EQ(message.rfind("left camera: 2 of 31 frames in the last 2.0 s answered no trigger pulse "
+                          "(1 none within 8.3 ms, median distance 16.7 ms; 1 a second frame for "
+                          "one pulse); frames without a PTZ_STATE",
+                          0),
+            0u)
       << message;
 }
 
@@ -253,26 +264,67 @@ TEST(CameraTrigger, ParametersAreCheckedWithTheParameterNamed) {
     for (const auto& [k, v] : values) p.set(k, v);
     try {
       const CameraConfig c = cameraConfigFrom(p);
-      return "ok " + std::to_string(c.trigger.windowUs());
+      char latencies[64];
+      std::snprintf(latencies, sizeof latencies, " %g %g", c.capture[0].latency_s,
+                    c.capture[1].latency_s);
+      return "ok " + std::to_string(c.trigger.windowUs()) + latencies;
     } catch (const ptz::ConfigError& e) {
       return std::string(e.what());
     }
   };
-  EXPECT_EQ(error({}), "ok 8333");
-  EXPECT_EQ(error({{"trigger_window_s", "0.005"}}), "ok 5000");
-  EXPECT_EQ(error({{"trigger_chip", ""}, {"right_source", "right.avi"}}), "ok 8333");
+  EXPECT_EQ(error({}), "ok 8333 0 0");
+  EXPECT_EQ(error({{"trigger_window_s", "0.005"}}), "ok 5000 0 0");
+  // Each camera may have its own latency.
+  EXPECT_EQ(error({{"latency_s", "0.03"}, {"right_latency_s", "0.045"}}), "ok 8333 0.03 0.045");
+  EXPECT_EQ(error({{"trigger_chip", ""}, {"right_source", "right.avi"}}), "ok 8333 0 0");
   EXPECT_EQ(error({{"right_source", "right.avi"}}),
             "parameter 'trigger_chip' is set, but right_source is a recording: only live cameras "
             "can be triggered");
   EXPECT_EQ(error({{"trigger_line", "-1"}}),
             "parameter 'trigger_line' must be the offset of the trigger output on 'gpiochip0', got "
             "-1");
-  EXPECT_EQ(error({{"trigger_rate_hz", "0"}}),
-            "parameter 'trigger_rate_hz' must be > 0 and <= 1000, got 0");
+  EXPECT_EQ(error({{"trigger_rate_hz", "0.5"}}),
+            "parameter 'trigger_rate_hz' must be 1..1000, got 0.5");
   EXPECT_EQ(error({{"trigger_pulse_s", "0.05"}}),
             "parameter 'trigger_pulse_s' must be > 0 and shorter than the period (0.0333333 s), "
             "got 0.05");
   EXPECT_EQ(error({{"trigger_window_s", "0.02"}}),
             "parameter 'trigger_window_s' must be >= 0 and below half the period (0.0166667 s), "
             "got 0.02");
+}
+
+TEST(CameraTrigger, AfterTheWallClockIsSteppedBackPulsesAndFramesMatchAgain) {
+  TriggerLog log;
+  TriggerMatcher matcher(log, 8'333, 2.0);
+  for (int k = 0; k < 10; ++k) log.add(pulseUtime(k));
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(matcher.match(ptz::Side::kLeft, pulseUtime(k) + 1'000, pulseUtime(k) + 5'000),
+              pulseUtime(k));
+  }
+  // NTP steps the clock back 5 s: the pulses and the frames' grab times both jump.
+  const int64_t step_us = 5'000'000;
+  for (int k = 10; k < 20; ++k) log.add(pulseUtime(k) - step_us);
+  EXPECT_EQ(log.clockSteps(), 1);
+  EXPECT_EQ(log.pulses(), 20);
+  for (int k = 10; k < 20; ++k) {
+    const int64_t t = pulseUtime(k) - step_us;
+    EXPECT_EQ(matcher.match(ptz::Side::kLeft, t + 1'000, t + 5'000), t) << k;
+  }
+  std::map<std::string, int64_t> counters;
+  matcher.addCounters(&counters);
+  EXPECT_EQ(counters.at("trigger_matched_left"), 20);
+  EXPECT_EQ(counters.at("trigger_unmatched_left"), 0);
+  EXPECT_EQ(counters.at("trigger_clock_steps"), 1);
+}
+
+TEST(CameraTrigger, AV4l2BufferTimeIsUsedOnlyWhenItIsPlausible) {
+  const int64_t wall = 1'700'000'000'000'000;
+  // 10.5 ms old on the monotonic clock: 10.5 ms before now on the wall clock.
+  EXPECT_EQ(bufferTimeToWallUtime(1'000.0, 1'010.5, wall), wall - 10'500);
+  EXPECT_EQ(bufferTimeToWallUtime(1'010.5, 1'010.5, wall), wall);
+  EXPECT_FALSE(bufferTimeToWallUtime(0.0, 1'010.5, wall));      // no frame yet
+  EXPECT_FALSE(bufferTimeToWallUtime(1'020.0, 1'010.5, wall));  // after now: another clock
+  EXPECT_FALSE(bufferTimeToWallUtime(1.7e12, 1'010.5, wall));   // CLOCK_REALTIME
+  EXPECT_FALSE(bufferTimeToWallUtime(5.0, 1'010.5, wall));      // older than a second
+  EXPECT_FALSE(bufferTimeToWallUtime(NAN, 1'010.5, wall));
 }

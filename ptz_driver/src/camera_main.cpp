@@ -104,7 +104,8 @@ class CameraNode {
     } else {
       trigger_chip_ = openGpiodChip(t.chip, "ptz-camera", "trigger_chip");
     }
-    trigger_chip_->requestOutput(t.line, "trigger_line");
+    trigger_chip_->requestOutput(t.line, "trigger_line", t.active_low);
+    trigger_line_ = t.line;
     pulser_ = std::make_unique<TriggerPulser>(*trigger_chip_, t, pulses_, realPulseClock());
     pulser_->start();
   }
@@ -146,12 +147,36 @@ class CameraNode {
       ptz_wait_ms_.clear();
     }
     std::string message;
-    const Health h = camera_->health(now, &message);
+    Health h = camera_->health(now, &message);
+    if (pulser_) addTriggerHealth(now, &h, &message);
     status_.setState(statusState(h), message);
     // Sources log each of their events; a rig that does not pair has no event: rate-limited.
     const std::string no_pair = camera_->noPairMessage(now);
     if (!no_pair.empty()) log_.warn("no_pair", "ptz-camera: " + no_pair);
     status_.maybePublish();
+  }
+
+  // Failed writes to the trigger line (ERROR) and periods the pulser missed (WARN), for
+  // kTriggerProblemS after the last one.
+  void addTriggerHealth(int64_t now, Health* h, std::string* message) {
+    constexpr int64_t kTriggerProblemUs = 2'000'000;
+    auto note = [&](Health level, const std::string& text) {
+      if (static_cast<int>(level) > static_cast<int>(*h)) *h = level;
+      *message += (message->empty() ? "" : "; ") + text;
+    };
+    const int64_t io_errors = trigger_chip_->ioErrors(), missed = pulser_->missedPeriods();
+    if (io_errors > trigger_io_errors_) trigger_io_error_utime_ = now;
+    if (missed > trigger_missed_) trigger_missed_utime_ = now;
+    if (trigger_io_error_utime_ > 0 && now - trigger_io_error_utime_ < kTriggerProblemUs) {
+      note(Health::kError, "trigger line " + std::to_string(trigger_line_) + ": " +
+                               std::to_string(io_errors) + " writes failed");
+    }
+    if (trigger_missed_utime_ > 0 && now - trigger_missed_utime_ < kTriggerProblemUs) {
+      note(Health::kWarn, "trigger: " + std::to_string(missed) +
+                              " periods missed (the machine was busy: run under chrt -f)");
+    }
+    trigger_io_errors_ = io_errors;
+    trigger_missed_ = missed;
   }
 
   lcm::LCM* lcm_;
@@ -166,6 +191,9 @@ class CameraNode {
   std::unique_ptr<GpioLines> trigger_chip_;
   TriggerLog pulses_;
   std::unique_ptr<TriggerPulser> pulser_;
+  int trigger_line_ = -1;
+  int64_t trigger_io_errors_ = 0, trigger_missed_ = 0;
+  int64_t trigger_io_error_utime_ = 0, trigger_missed_utime_ = 0;
   std::unique_ptr<StereoCamera> camera_;
   int64_t seq_ = 0;
   std::vector<double> wait_ms_, ptz_wait_ms_;

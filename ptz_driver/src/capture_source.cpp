@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <ctime>
 #include <deque>
 #include <thread>
 
@@ -51,7 +52,7 @@ class Reader {
       CapturedFrame f;
       if (spec_.live()) {
         if (!cap_.grab()) return finish(FrameSource::Poll::kFailed, "no frame (unplugged?)");
-        f.capture_utime = wallClockUtime() - std::llround(o_.latency_s * 1e6);
+        stampLive(&f);
         if (!cap_.retrieve(f.image) || f.image.empty()) {
           return finish(FrameSource::Poll::kFailed, "an empty frame");
         }
@@ -66,6 +67,23 @@ class Reader {
   }
 
  private:
+  // The V4L2 buffer's time where the driver gives one, else the grab's.
+  void stampLive(CapturedFrame* f) {
+    const int64_t wall_utime = wallClockUtime();
+    int64_t t = wall_utime;
+    if (spec_.kind == SourceKind::kV4l2) {
+      timespec mono{};
+      clock_gettime(CLOCK_MONOTONIC, &mono);
+      const double mono_ms = static_cast<double>(mono.tv_sec) * 1e3 + mono.tv_nsec * 1e-6;
+      if (const auto buffer_utime =
+              bufferTimeToWallUtime(cap_.get(cv::CAP_PROP_POS_MSEC), mono_ms, wall_utime)) {
+        t = *buffer_utime;
+        f->buffer_time = true;
+      }
+    }
+    f->capture_utime = t - std::llround(o_.latency_s * 1e6);
+  }
+
   bool open(std::string* error) {
     const std::string what = std::string(sourceKindName(spec_.kind)) + " '" + spec_.text + "'";
     switch (spec_.kind) {

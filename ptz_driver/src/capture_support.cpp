@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "ptz_driver/capture_source.hpp"
 
@@ -39,6 +40,14 @@ void FrameNotifier::notify() {
 void FrameNotifier::drain() {
   uint64_t count = 0;
   [[maybe_unused]] const ssize_t n = ::read(fd_, &count, sizeof count);
+}
+
+std::optional<int64_t> bufferTimeToWallUtime(double buffer_ms, double mono_now_ms,
+                                             int64_t wall_now_utime, double max_age_ms) {
+  const double age_ms = mono_now_ms - buffer_ms;
+  // 0 before the first frame; other clocks (REALTIME, a driver's own) land far outside.
+  if (!(buffer_ms > 0) || !(age_ms >= 0) || age_ms > max_age_ms) return std::nullopt;
+  return wall_now_utime - std::llround(age_ms * 1e3);
 }
 
 int64_t wallClockUtime() {

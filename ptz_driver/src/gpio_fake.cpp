@@ -55,11 +55,11 @@ FakeGpio::Line& FakeGpio::line(int offset, const std::string& name) {
   return it->second;
 }
 
-void FakeGpio::requestOutput(int offset, const std::string& name) {
+void FakeGpio::requestOutput(int offset, const std::string& name, bool idle_high) {
   std::lock_guard<std::mutex> lock(mutex_);
   Line& l = line(offset, name);
   if (!l.output) throw ConfigError("parameter '" + name + "': simulated line is an input");
-  l.level = false;
+  l.level = idle_high;
 }
 
 void FakeGpio::requestEvents(int offset, Bias, const std::string& name) {

@@ -3,11 +3,13 @@
 #include <gpiod.h>
 #include <poll.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <ctime>
 #include <map>
+#include <set>
 
 #include "ptz/config.hpp"
 #include "ptz_driver/gpio_event_merger.hpp"
@@ -46,16 +48,20 @@ class GpiodLines : public GpioLines {
   }
   ~GpiodLines() override {
     for (auto& [offset, line] : lines_) {
-      if (!events_.count(offset)) gpiod_line_set_value(line, 0);  // outputs end low
+      // Outputs end idle: motors off, a trigger line inactive.
+      if (!events_.count(offset)) gpiod_line_set_value(line, idle_high_.count(offset) ? 1 : 0);
       gpiod_line_release(line);
     }
     gpiod_chip_close(chip_);
   }
 
-  void requestOutput(int offset, const std::string& name) override {
+  using GpioLines::requestOutput;
+  void requestOutput(int offset, const std::string& name, bool idle_high) override {
     gpiod_line* line = lineOf(offset, name);
-    if (gpiod_line_request_output(line, consumer_.c_str(), 0) < 0) failRequest(offset, name);
+    if (gpiod_line_request_output(line, consumer_.c_str(), idle_high ? 1 : 0) < 0)
+      failRequest(offset, name);
     lines_[offset] = line;
+    if (idle_high) idle_high_.insert(offset);
   }
 
   void requestEvents(int offset, Bias bias, const std::string& name) override {
@@ -138,7 +144,9 @@ class GpiodLines : public GpioLines {
   std::vector<pollfd> pollfds_;
   std::vector<int> poll_offsets_;
   GpioEventMerger merger_;
-  int64_t io_errors_ = 0;
+  std::set<int> idle_high_;
+  // Counted on the thread that drives a line, read by the status on another.
+  std::atomic<int64_t> io_errors_{0};
 };
 
 }  // namespace

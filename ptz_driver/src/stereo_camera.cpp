@@ -43,7 +43,10 @@ void declareCameraParams(Params& p) {
   p.add("right_timestamps", "", "right video/folder capture times (as left_timestamps)");
   p.add("loop", false, "files: play again from the start at the end, times continuing");
   p.add("file_fps", 0.0, "Hz", "rate of files without timestamps (0: the video's own; folders 30)");
-  p.add("latency_s", 0.0, "s", "live sources: capture time = grab time minus this");
+  p.add("latency_s", 0.0, "s",
+        "live sources: capture time = grab time (V4L2: the driver's buffer time) minus this");
+  p.add("left_latency_s", -1.0, "s", "the left camera's own latency_s (negative: latency_s)");
+  p.add("right_latency_s", -1.0, "s", "the right camera's own latency_s (negative: latency_s)");
   p.add("width", 640, "px",
         "published width, other sizes resized (0: as delivered); asked of V4L2");
   p.add("height", 480, "px", "published height (0: as delivered); asked of V4L2");
@@ -101,7 +104,11 @@ CameraConfig cameraConfigFrom(const Params& p) {
     o.height = height;
     o.fps = p.getDouble("fps");
     o.fourcc = fourcc;
-    o.latency_s = p.getDouble("latency_s");
+    const double own_latency_s = p.getDouble(side + "_latency_s");
+    if (!std::isfinite(own_latency_s)) {
+      throw ConfigError("parameter '" + side + "_latency_s' must be a number");
+    }
+    o.latency_s = own_latency_s >= 0 ? own_latency_s : p.getDouble("latency_s");
     o.file_fps = p.getDouble("file_fps");
     o.loop = p.getBool("loop");
     const std::string ts = p.getString(side + "_timestamps");
@@ -160,6 +167,7 @@ std::vector<StampedPair> StereoCamera::step(int64_t now_utime) {
     sources_[s].step(static_cast<double>(now_utime) * 1e-6, &frames, room);
     for (auto& f : frames) {
       if (f.resized) ++resized_[s];
+      if (f.buffer_time) ++buffer_stamped_[s];
       if (trigger_) {
         const auto pulse = trigger_->match(static_cast<Side>(s), f.capture_utime, now_utime);
         if (!pulse) continue;
@@ -280,6 +288,7 @@ std::map<std::string, int64_t> StereoCamera::counters() const {
     c["frames_" + side] = sources_[s].frames();
     c["unmatched_" + side] = pairer_.unmatched(static_cast<Side>(s));
     c["resized_" + side] = resized_[s];
+    c["buffer_stamped_" + side] = buffer_stamped_[s];
     c["reconnects_" + side] = sources_[s].reconnects();
     c["source_overflow_" + side] = sources_[s].overflowed();
     c["ended_" + side] = ended_[s] ? 1 : 0;

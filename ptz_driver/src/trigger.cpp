@@ -66,8 +66,8 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
     throw ConfigError("parameter 'trigger_line' must be the offset of the trigger output on '" +
                       t.chip + "', got " + std::to_string(t.line));
   }
-  if (!std::isfinite(t.rate_hz) || t.rate_hz <= 0 || t.rate_hz > 1000) {
-    throw ConfigError("parameter 'trigger_rate_hz' must be > 0 and <= 1000, got " + num(t.rate_hz));
+  if (!std::isfinite(t.rate_hz) || t.rate_hz < 1 || t.rate_hz > 1000) {
+    throw ConfigError("parameter 'trigger_rate_hz' must be 1..1000, got " + num(t.rate_hz));
   }
   const double period_s = 1 / t.rate_hz;
   if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s >= period_s) {
@@ -89,6 +89,10 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
 
 void TriggerLog::add(int64_t utime) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!times_.empty() && utime <= times_.back()) {
+    times_.clear();
+    ++epoch_;
+  }
   times_.push_back(utime);
   if (times_.size() > capacity_) times_.pop_front();
   ++pulses_;
@@ -102,12 +106,17 @@ std::optional<TriggerLog::Nearest> TriggerLog::nearest(int64_t utime) const {
   if (it != times_.begin() && std::llabs(utime - *std::prev(it)) <= std::llabs(utime - best)) {
     best = *std::prev(it);
   }
-  return Nearest{best, utime - best};
+  return Nearest{best, utime - best, epoch_};
 }
 
 int64_t TriggerLog::pulses() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return pulses_;
+}
+
+int64_t TriggerLog::clockSteps() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return epoch_;
 }
 
 PulseClock realPulseClock() {
@@ -169,25 +178,37 @@ void TriggerPulser::period(int64_t k) {
     ++missed_;
     return;
   }
+  const int64_t before_utime = clock_.wall_utime();
   drive(true);
-  // The edge's wall time, read at once after it.
-  log_.add(clock_.wall_utime());
-  clock_.sleep_until_s(t_s + params_.pulse_s);
+  const double edge_s = clock_.now_s();
+  log_.add((before_utime + clock_.wall_utime()) / 2);
+  // Full width from the edge, however late it came.
+  clock_.sleep_until_s(edge_s + params_.pulse_s);
   drive(false);
 }
 
 std::optional<int64_t> TriggerMatcher::match(Side side, int64_t capture_utime, int64_t now_utime) {
   const auto s = static_cast<size_t>(side);
+  newest_arrival_utime_ = std::max(newest_arrival_utime_, now_utime);
   const std::optional<TriggerLog::Nearest> n = log_.nearest(capture_utime);
-  const bool near = n && std::llabs(n->offset_us) <= window_us_;
-  // A pulse answers one frame: a second one near it is not the camera following the trigger.
-  const bool fresh = near && (!last_pulse_[s] || n->pulse_utime > *last_pulse_[s]);
+  if (n && n->epoch != last_epoch_[s]) {  // the wall clock was stepped: pulses start again
+    last_pulse_[s].reset();
+    last_epoch_[s] = n->epoch;
+  }
+  Verdict v = Verdict::kMatched;
+  if (!n) {
+    v = Verdict::kNoPulseYet;
+  } else if (std::llabs(n->offset_us) > window_us_) {
+    v = Verdict::kFar;
+  } else if (last_pulse_[s] && n->pulse_utime <= *last_pulse_[s]) {
+    v = Verdict::kRepeat;  // a pulse answers one frame: a second is not following the trigger
+  }
   auto& recent = recent_[s];
-  recent.push_back({now_utime, n ? n->offset_us : 0, fresh});
+  recent.push_back({now_utime, n ? n->offset_us : 0, v});
   while (!recent.empty() && recent.front().arrival_utime < now_utime - recent_us_) {
     recent.pop_front();
   }
-  if (!fresh) {
+  if (v != Verdict::kMatched) {
     ++unmatched_[s];
     return std::nullopt;
   }
@@ -200,25 +221,39 @@ std::string TriggerMatcher::problem(int64_t now_utime, bool* error) const {
   std::string out;
   *error = false;
   for (size_t s = 0; s < 2; ++s) {
-    int64_t total = 0, matched = 0;
-    std::vector<double> distance_us;
+    std::map<Verdict, int64_t> count;
+    int64_t total = 0;
+    std::vector<double> far_us;
     for (const auto& seen : recent_[s]) {
       if (seen.arrival_utime < now_utime - recent_us_) continue;
       ++total;
-      matched += seen.matched ? 1 : 0;
-      distance_us.push_back(static_cast<double>(std::llabs(seen.offset_us)));
+      ++count[seen.verdict];
+      if (seen.verdict == Verdict::kFar) far_us.push_back(std::fabs(double(seen.offset_us)));
     }
+    const int64_t matched = count[Verdict::kMatched];
     if (matched == total) continue;
     const bool most_not = 2 * matched < total;
     *error = *error || most_not;
     char head[160];
     std::snprintf(head, sizeof head,
-                  "%s camera: %lld of %lld frames in the last %.1f s answered no", kSide[s],
-                  static_cast<long long>(total - matched), static_cast<long long>(total),
+                  "%s camera: %lld of %lld frames in the last %.1f s answered no trigger pulse (",
+                  kSide[s], static_cast<long long>(total - matched), static_cast<long long>(total),
                   static_cast<double>(recent_us_) * 1e-6);
-    std::string m = std::string(head) + " trigger pulse (none within " +
-                    ms(static_cast<double>(window_us_)) + "; median distance " +
-                    ms(median(distance_us)) + ")";
+    std::vector<std::string> why;
+    if (count[Verdict::kFar] > 0) {
+      why.push_back(std::to_string(count[Verdict::kFar]) + " none within " +
+                    ms(static_cast<double>(window_us_)) + ", median distance " +
+                    ms(median(far_us)));
+    }
+    if (count[Verdict::kRepeat] > 0) {
+      why.push_back(std::to_string(count[Verdict::kRepeat]) + " a second frame for one pulse");
+    }
+    if (count[Verdict::kNoPulseYet] > 0) {
+      why.push_back(std::to_string(count[Verdict::kNoPulseYet]) + " before the first pulse");
+    }
+    std::string m = head;
+    for (size_t i = 0; i < why.size(); ++i) m += (i ? "; " : "") + why[i];
+    m += ")";
     if (most_not) {
       m += ": is it in external-trigger mode and wired to the trigger line, and is latency_s its "
            "delay from the pulse?";
@@ -235,13 +270,17 @@ void TriggerMatcher::addCounters(std::map<std::string, int64_t>* counters) const
     (*counters)["trigger_unmatched_" + side] = unmatched_[s];
     std::vector<double> offsets_us;
     for (const auto& seen : recent_[s]) {
-      if (seen.matched) offsets_us.push_back(static_cast<double>(seen.offset_us));
+      if (seen.verdict == Verdict::kMatched &&
+          seen.arrival_utime >= newest_arrival_utime_ - recent_us_) {
+        offsets_us.push_back(static_cast<double>(seen.offset_us));
+      }
     }
-    // How far after its pulse a frame's grab time minus latency_s falls: what to add to it.
+    // How far after its pulse a frame's grab time minus latency falls: what to add to it.
     if (!offsets_us.empty()) {
       (*counters)["trigger_offset_us_p50_" + side] = std::llround(median(offsets_us));
     }
   }
+  (*counters)["trigger_clock_steps"] = log_.clockSteps();
 }
 
 }  // namespace ptz::driver

@@ -52,7 +52,8 @@ std::vector<std::string> listImageFiles(const std::string& folder);
 
 struct CapturedFrame {
   cv::Mat image;
-  int64_t capture_utime = 0;  // live: grab time minus latency; files: the recorded time
+  int64_t capture_utime = 0;  // live: grab (V4L2: buffer) time minus latency; files: recorded
+  bool buffer_time = false;   // stamped from the V4L2 buffer's time, not the grab's
   int64_t index = 0;          // frame number within this connection (files: within the file)
   bool resized = false;       // delivered at another size than configured
 };

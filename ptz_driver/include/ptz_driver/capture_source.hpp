@@ -20,7 +20,7 @@ struct CaptureOptions {
   int width = 0, height = 0;        // frames of another size are resized (0: as delivered)
   double fps = 0;                   // requested from V4L2 cameras (0: the driver's default)
   std::string fourcc;               // V4L2 pixel format, e.g. MJPG ("": the driver's default)
-  double latency_s = 0;             // live: capture time = grab time - latency_s
+  double latency_s = 0;             // live: capture time = grab (or V4L2 buffer) time - this
   std::vector<int64_t> timestamps;  // files: recorded capture times (empty: made from the rate)
   double file_fps = 0;              // files without timestamps (0: the video's rate; folders 30)
   bool loop = false;                // files: start again at the end, times continuing
@@ -69,6 +69,12 @@ int abandonedReaders();
 
 // Wall clock, microseconds since the Unix epoch.
 int64_t wallClockUtime();
+
+// A V4L2 buffer's time (CLOCK_MONOTONIC in ms, as OpenCV's CAP_PROP_POS_MSEC gives it after a
+// grab) on the wall clock, when plausible: not after mono_now_ms and at most max_age_ms before.
+// Unlike the grab time it does not move when a frame waited in the driver's queue.
+std::optional<int64_t> bufferTimeToWallUtime(double buffer_ms, double mono_now_ms,
+                                             int64_t wall_now_utime, double max_age_ms = 1000);
 
 // An 8-bit BGR or gray image of the given size (0: keep), converting other depths and BGRA;
 // returns whether it had to resize.

@@ -31,7 +31,8 @@ class FakeGpio : public GpioLines {
  public:
   explicit FakeGpio(std::vector<FakeAxisSpec> axes, double start_s = 0, double substep_s = 10e-6);
 
-  void requestOutput(int line, const std::string& name) override;
+  using GpioLines::requestOutput;
+  void requestOutput(int line, const std::string& name, bool idle_high) override;
   void requestEvents(int line, Bias bias, const std::string& name) override;
   void set(int line, bool high) override;
   bool get(int line) override;

@@ -28,7 +28,9 @@ class GpioLines {
 
   // `name` is the parameter that chose the line, so that errors name it. Throws ConfigError
   // naming the chip, the line and `name` when the line cannot be had.
-  virtual void requestOutput(int line, const std::string& name) = 0;  // driven low at first
+  // Driven to its idle level at once, and left there when the lines are released.
+  virtual void requestOutput(int line, const std::string& name, bool idle_high) = 0;
+  void requestOutput(int line, const std::string& name) { requestOutput(line, name, false); }
   virtual void requestEvents(int line, Bias bias, const std::string& name) = 0;
 
   virtual void set(int line, bool high) = 0;

@@ -38,23 +38,28 @@ void declareTriggerParams(Params& p);
 // recordings carry their own capture times and cannot be triggered.
 TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live);
 
-// The pulses sent, in wall-clock microseconds: written by the pulser's thread, read by the camera.
+// The pulses sent, in wall-clock microseconds (what frames are stamped in): written by the
+// pulser's thread, read by the camera.
 class TriggerLog {
  public:
   explicit TriggerLog(size_t capacity = 1024) : capacity_(capacity) {}
-  void add(int64_t utime);  // in increasing order
-  // The pulse nearest to utime, and its signed distance (utime - pulse); nullopt before any.
+  // A pulse not after the previous one means the wall clock was stepped back (NTP): the log
+  // starts again from it (a new epoch), as frames are stamped on the stepped clock too.
+  void add(int64_t utime);
+  // The pulse nearest to utime, its signed distance (utime - pulse) and the log's epoch;
+  // nullopt before any pulse.
   struct Nearest {
-    int64_t pulse_utime = 0, offset_us = 0;
+    int64_t pulse_utime = 0, offset_us = 0, epoch = 0;
   };
   std::optional<Nearest> nearest(int64_t utime) const;
   int64_t pulses() const;
+  int64_t clockSteps() const;  // times the log started again
 
  private:
   mutable std::mutex mutex_;
   std::deque<int64_t> times_;
   size_t capacity_;
-  int64_t pulses_ = 0;
+  int64_t pulses_ = 0, epoch_ = 0;
 };
 
 // The clocks the pulser keeps; tests inject one whose sleeping moves simulated time.
@@ -65,9 +70,10 @@ struct PulseClock {
 };
 PulseClock realPulseClock();  // CLOCK_MONOTONIC (gpioClockS), clock_nanosleep, the wall clock
 
-// Drives the line: active for pulse_s at the start of every period, otherwise inactive. A period
+// Drives the line: active for pulse_s from the start of every period, otherwise inactive. A period
 // whose start was missed by more than half a period (the machine was busy) is skipped and
-// counted rather than pulsed late, so that a late pulse is never taken for a frame's.
+// counted rather than pulsed late, so that a late pulse is never taken for a frame's. Each
+// pulse is logged at the middle of the wall-clock readings just before and after its edge.
 class TriggerPulser {
  public:
   // The line must already be requested as an output of `lines`.
@@ -103,20 +109,23 @@ class TriggerMatcher {
   // The pulse's time, or nullopt (then the frame is not used): no pulse near, or the side's
   // previous frame already answered that pulse.
   std::optional<int64_t> match(Side side, int64_t capture_utime, int64_t now_utime);
-  // "" or, for a side whose recent frames mostly answered no pulse: "right camera: 3 of 46
-  // frames in the last 2.0 s within 8.3 ms of a trigger pulse (...)". error: most did not.
+  // "" or, for each side with recent frames that answered no pulse: "right camera: 24 of 46
+  // frames in the last 2.0 s answered no trigger pulse (...)". error: most of a side's did not.
   std::string problem(int64_t now_utime, bool* error) const;
   void addCounters(std::map<std::string, int64_t>* counters) const;
 
  private:
+  enum class Verdict { kMatched, kNoPulseYet, kFar, kRepeat };
   struct Seen {
     int64_t arrival_utime, offset_us;
-    bool matched;
+    Verdict verdict;
   };
   const TriggerLog& log_;
   int64_t window_us_, recent_us_;
   std::array<std::deque<Seen>, 2> recent_;
   std::array<std::optional<int64_t>, 2> last_pulse_;
+  std::array<int64_t, 2> last_epoch_{0, 0};
+  int64_t newest_arrival_utime_ = 0;
   std::array<int64_t, 2> matched_{0, 0}, unmatched_{0, 0};
 };
 
