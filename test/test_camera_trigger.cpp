@@ -24,17 +24,20 @@ constexpr int64_t kWallStart = 1'700'000'000'000'000;  // wall clock at simulate
 constexpr int kLine = 7;
 constexpr int64_t kPeriodUs = 33'333;
 
-// Simulated time: sleeping moves it to the deadline, late by `late_s` once when asked.
+// Simulated time: sleeping moves it to the deadline, late by `late_s` once when asked. Each
+// reading of the wall clock may take wall_read_us (as if the edge's ioctl took that long).
 struct SimClock {
   double now_s = 100.0;
   double late_once_s = 0;
+  int64_t wall_read_us = 0, wall_reads = 0;
   PulseClock clock() {
-    return {[this] { return now_s; },
-            [this](double t_s) {
-              now_s = std::max(now_s, t_s) + late_once_s;
-              late_once_s = 0;
-            },
-            [this] { return kWallStart + std::llround(now_s * 1e6); }};
+    return {
+        [this] { return now_s; },
+        [this](double t_s) {
+          now_s = std::max(now_s, t_s) + late_once_s;
+          late_once_s = 0;
+        },
+        [this] { return kWallStart + std::llround(now_s * 1e6) + wall_read_us * wall_reads++; }};
   }
 };
 
@@ -130,6 +133,36 @@ TEST(CameraTrigger, APeriodStartedTooLateIsSkippedAndCountedNotPulsedLate) {
   EXPECT_EQ(p.pulser->missedPeriods(), 1);
   EXPECT_EQ(p.log.nearest(pulseUtime(30))->offset_us, -4'000);
   EXPECT_NEAR(p.chip.tally(kLine).high_s - high_before_s, 0.002, 2e-4);
+}
+
+TEST(CameraTrigger, APulseIsLoggedBetweenTheClockReadingsAroundItsEdge) {
+  Pulsing p(trigger());
+  p.sim.wall_read_us = 300;  // the readings before and after the edge 300 us apart
+  p.pulser->run(3);
+  // Pulse k: read at the k-th pair of readings, 2k x 300 us and (2k + 1) x 300 us late.
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(p.log.nearest(pulseUtime(k))->offset_us, -(2 * k * 300 + 150)) << k;
+  }
+}
+
+TEST(CameraTrigger, FailedWritesAndMissedPeriodsShowInTheStatusForAWhile) {
+  TriggerLineHealth health(14, 2.0);
+  bool error = true;
+  EXPECT_EQ(health.update(kWallStart, 0, 0, &error), "");
+  EXPECT_FALSE(error);
+  EXPECT_EQ(health.update(kWallStart + 100'000, 0, 3, &error),
+            "trigger: 3 periods missed (the machine was busy: run under chrt -f)");
+  EXPECT_FALSE(error);
+  EXPECT_EQ(health.update(kWallStart + 200'000, 5, 3, &error),
+            "trigger line 14: 5 writes failed; trigger: 3 periods missed (the machine was busy: "
+            "run under chrt -f)");
+  EXPECT_TRUE(error);
+  // No new ones: the missed periods are forgotten 2 s after the last, then the failed writes.
+  EXPECT_EQ(health.update(kWallStart + 2'150'000, 5, 3, &error),
+            "trigger line 14: 5 writes failed");
+  EXPECT_TRUE(error);
+  EXPECT_EQ(health.update(kWallStart + 2'250'000, 5, 3, &error), "");
+  EXPECT_FALSE(error);
 }
 
 TEST(CameraTrigger, FramesAreStampedWithTheirPulseAndPairExactly) {
@@ -285,9 +318,9 @@ TEST(CameraTrigger, ParametersAreCheckedWithTheParameterNamed) {
             "-1");
   EXPECT_EQ(error({{"trigger_rate_hz", "0.5"}}),
             "parameter 'trigger_rate_hz' must be 1..1000, got 0.5");
-  EXPECT_EQ(error({{"trigger_pulse_s", "0.05"}}),
-            "parameter 'trigger_pulse_s' must be > 0 and shorter than the period (0.0333333 s), "
-            "got 0.05");
+  EXPECT_EQ(error({{"trigger_pulse_s", "0.02"}}),
+            "parameter 'trigger_pulse_s' must be > 0 and at most half the period (0.0166667 s), "
+            "got 0.02");
   EXPECT_EQ(error({{"trigger_window_s", "0.02"}}),
             "parameter 'trigger_window_s' must be >= 0 and below half the period (0.0166667 s), "
             "got 0.02");
@@ -315,6 +348,30 @@ TEST(CameraTrigger, AfterTheWallClockIsSteppedBackPulsesAndFramesMatchAgain) {
   EXPECT_EQ(counters.at("trigger_matched_left"), 20);
   EXPECT_EQ(counters.at("trigger_unmatched_left"), 0);
   EXPECT_EQ(counters.at("trigger_clock_steps"), 1);
+  EXPECT_EQ(counters.at("trigger_offset_us_p50_left"), 1'000);  // of the frames since the step
+  bool error = true;
+  EXPECT_EQ(matcher.problem(pulseUtime(19) - step_us + 5'000, &error), "");
+  EXPECT_FALSE(error);
+}
+
+TEST(CameraTrigger, TheHintNamesTheLatencyParameterThatTheCameraUses) {
+  TriggerLog log;
+  for (int k = 0; k < 10; ++k) log.add(pulseUtime(k));
+  TriggerMatcher matcher(log, 3'000, 2.0, {false, true});
+  for (int k = 0; k < 10; ++k) {  // both 12 ms after their pulse: a latency 12 ms short
+    matcher.match(ptz::Side::kLeft, pulseUtime(k) + 12'000, pulseUtime(k) + 20'000);
+    matcher.match(ptz::Side::kRight, pulseUtime(k) + 12'000, pulseUtime(k) + 20'000);
+  }
+  bool error = false;
+  const std::string message = matcher.problem(pulseUtime(9) + 20'000, &error);
+  EXPECT_TRUE(error);
+  EXPECT_EQ(message,
+            "left camera: 10 of 10 frames in the last 2.0 s answered no trigger pulse (10 none "
+            "within 3.0 ms, median distance 12.0 ms): is it in external-trigger mode and wired to "
+            "the trigger line, and is latency_s its delay from the pulse?; right camera: 10 of 10 "
+            "frames in the last 2.0 s answered no trigger pulse (10 none within 3.0 ms, median "
+            "distance 12.0 ms): is it in external-trigger mode and wired to the trigger line, and "
+            "is right_latency_s its delay from the pulse?");
 }
 
 TEST(CameraTrigger, AV4l2BufferTimeIsUsedOnlyWhenItIsPlausible) {
@@ -327,4 +384,8 @@ TEST(CameraTrigger, AV4l2BufferTimeIsUsedOnlyWhenItIsPlausible) {
   EXPECT_FALSE(bufferTimeToWallUtime(1.7e12, 1'010.5, wall));   // CLOCK_REALTIME
   EXPECT_FALSE(bufferTimeToWallUtime(5.0, 1'010.5, wall));      // older than a second
   EXPECT_FALSE(bufferTimeToWallUtime(NAN, 1'010.5, wall));
+  // 24.9 days after boot a 32-bit time_t makes OpenCV's milliseconds wrap (to negative).
+  const double mono_ms = 2147483648.0 + 5'000;
+  EXPECT_EQ(bufferTimeToWallUtime(mono_ms - 10.5 - 4294967296.0, mono_ms, wall), wall - 10'500);
+  EXPECT_FALSE(bufferTimeToWallUtime(mono_ms - 2'000 - 4294967296.0, mono_ms, wall));
 }

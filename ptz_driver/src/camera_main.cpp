@@ -105,7 +105,7 @@ class CameraNode {
       trigger_chip_ = openGpiodChip(t.chip, "ptz-camera", "trigger_chip");
     }
     trigger_chip_->requestOutput(t.line, "trigger_line", t.active_low);
-    trigger_line_ = t.line;
+    trigger_health_.emplace(t.line, 2.0);
     pulser_ = std::make_unique<TriggerPulser>(*trigger_chip_, t, pulses_, realPulseClock());
     pulser_->start();
   }
@@ -156,27 +156,14 @@ class CameraNode {
     status_.maybePublish();
   }
 
-  // Failed writes to the trigger line (ERROR) and periods the pulser missed (WARN), for
-  // kTriggerProblemS after the last one.
   void addTriggerHealth(int64_t now, Health* h, std::string* message) {
-    constexpr int64_t kTriggerProblemUs = 2'000'000;
-    auto note = [&](Health level, const std::string& text) {
-      if (static_cast<int>(level) > static_cast<int>(*h)) *h = level;
-      *message += (message->empty() ? "" : "; ") + text;
-    };
-    const int64_t io_errors = trigger_chip_->ioErrors(), missed = pulser_->missedPeriods();
-    if (io_errors > trigger_io_errors_) trigger_io_error_utime_ = now;
-    if (missed > trigger_missed_) trigger_missed_utime_ = now;
-    if (trigger_io_error_utime_ > 0 && now - trigger_io_error_utime_ < kTriggerProblemUs) {
-      note(Health::kError, "trigger line " + std::to_string(trigger_line_) + ": " +
-                               std::to_string(io_errors) + " writes failed");
-    }
-    if (trigger_missed_utime_ > 0 && now - trigger_missed_utime_ < kTriggerProblemUs) {
-      note(Health::kWarn, "trigger: " + std::to_string(missed) +
-                              " periods missed (the machine was busy: run under chrt -f)");
-    }
-    trigger_io_errors_ = io_errors;
-    trigger_missed_ = missed;
+    bool error = false;
+    const std::string problem =
+        trigger_health_->update(now, trigger_chip_->ioErrors(), pulser_->missedPeriods(), &error);
+    if (problem.empty()) return;
+    const Health level = error ? Health::kError : Health::kWarn;
+    if (static_cast<int>(level) > static_cast<int>(*h)) *h = level;
+    *message += (message->empty() ? "" : "; ") + problem;
   }
 
   lcm::LCM* lcm_;
@@ -191,9 +178,7 @@ class CameraNode {
   std::unique_ptr<GpioLines> trigger_chip_;
   TriggerLog pulses_;
   std::unique_ptr<TriggerPulser> pulser_;
-  int trigger_line_ = -1;
-  int64_t trigger_io_errors_ = 0, trigger_missed_ = 0;
-  int64_t trigger_io_error_utime_ = 0, trigger_missed_utime_ = 0;
+  std::optional<TriggerLineHealth> trigger_health_;
   std::unique_ptr<StereoCamera> camera_;
   int64_t seq_ = 0;
   std::vector<double> wait_ms_, ptz_wait_ms_;

@@ -44,9 +44,15 @@ void FrameNotifier::drain() {
 
 std::optional<int64_t> bufferTimeToWallUtime(double buffer_ms, double mono_now_ms,
                                              int64_t wall_now_utime, double max_age_ms) {
-  const double age_ms = mono_now_ms - buffer_ms;
+  constexpr double k2To31 = 2147483648.0, k2To32 = 4294967296.0;
+  double age_ms = mono_now_ms - buffer_ms;
+  // With a 32-bit time_t (armhf) OpenCV's 1000 * tv_sec wraps after 24.9 days of uptime.
+  if (std::isfinite(age_ms) && age_ms > max_age_ms && std::fabs(buffer_ms) < k2To31 + 1e3 &&
+      mono_now_ms >= k2To31) {
+    age_ms = std::fmod(age_ms, k2To32);
+  }
   // 0 before the first frame; other clocks (REALTIME, a driver's own) land far outside.
-  if (!(buffer_ms > 0) || !(age_ms >= 0) || age_ms > max_age_ms) return std::nullopt;
+  if (buffer_ms == 0 || !(age_ms >= 0) || age_ms > max_age_ms) return std::nullopt;
   return wall_now_utime - std::llround(age_ms * 1e3);
 }
 

@@ -145,7 +145,8 @@ StereoCamera::StereoCamera(const CameraConfig& config, std::array<SourceFactory,
       history_(config.ptz_history_s, config.max_ptz_extrapolation_s) {
   if (config.trigger.enabled()) {
     if (!pulses) throw std::invalid_argument("StereoCamera: a trigger line without its pulses");
-    trigger_.emplace(*pulses, config.trigger.windowUs(), config.pairer.no_pair_warn_s);
+    trigger_.emplace(*pulses, config.trigger.windowUs(), config.pairer.no_pair_warn_s,
+                     config.trigger.own_latency);
   }
 }
 

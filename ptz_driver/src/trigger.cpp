@@ -49,7 +49,8 @@ void declareTriggerParams(Params& p) {
   p.add("trigger_pulse_s", 0.001, "s", "how long each pulse is active");
   p.add("trigger_active_low", false, "pulses drive the line low (idle high)");
   p.add("trigger_window_s", 0.0, "s",
-        "a frame whose capture time (grab time minus latency_s) is this near a pulse answers it "
+        "a frame whose capture time (grab or V4L2 buffer time minus latency) is this near a "
+        "pulse answers it "
         "(0: a quarter of the period)");
 }
 
@@ -62,6 +63,7 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
   t.pulse_s = p.getDouble("trigger_pulse_s");
   t.active_low = p.getBool("trigger_active_low");
   t.window_s = p.getDouble("trigger_window_s");
+  t.own_latency = {p.getDouble("left_latency_s") >= 0, p.getDouble("right_latency_s") >= 0};
   if (t.line < 0) {
     throw ConfigError("parameter 'trigger_line' must be the offset of the trigger output on '" +
                       t.chip + "', got " + std::to_string(t.line));
@@ -70,9 +72,10 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
     throw ConfigError("parameter 'trigger_rate_hz' must be 1..1000, got " + num(t.rate_hz));
   }
   const double period_s = 1 / t.rate_hz;
-  if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s >= period_s) {
-    throw ConfigError("parameter 'trigger_pulse_s' must be > 0 and shorter than the period (" +
-                      num(period_s) + " s), got " + num(t.pulse_s));
+  // At most half: a pulse whose edge came up to half a period late still ends before the next.
+  if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s > period_s / 2) {
+    throw ConfigError("parameter 'trigger_pulse_s' must be > 0 and at most half the period (" +
+                      num(period_s / 2) + " s), got " + num(t.pulse_s));
   }
   if (!std::isfinite(t.window_s) || t.window_s < 0 || t.window_s >= period_s / 2) {
     throw ConfigError("parameter 'trigger_window_s' must be >= 0 and below half the period (" +
@@ -189,9 +192,12 @@ void TriggerPulser::period(int64_t k) {
 
 std::optional<int64_t> TriggerMatcher::match(Side side, int64_t capture_utime, int64_t now_utime) {
   const auto s = static_cast<size_t>(side);
-  newest_arrival_utime_ = std::max(newest_arrival_utime_, now_utime);
+  if (now_utime < newest_arrival_utime_) {  // the wall clock was stepped back: start over
+    for (auto& r : recent_) r.clear();
+  }
+  newest_arrival_utime_ = now_utime;
   const std::optional<TriggerLog::Nearest> n = log_.nearest(capture_utime);
-  if (n && n->epoch != last_epoch_[s]) {  // the wall clock was stepped: pulses start again
+  if (n && n->epoch != last_epoch_[s]) {  // the pulses started again after a step
     last_pulse_[s].reset();
     last_epoch_[s] = n->epoch;
   }
@@ -215,6 +221,26 @@ std::optional<int64_t> TriggerMatcher::match(Side side, int64_t capture_utime, i
   ++matched_[s];
   last_pulse_[s] = n->pulse_utime;
   return n->pulse_utime;
+}
+
+std::string TriggerLineHealth::update(int64_t now_utime, int64_t io_errors, int64_t missed_periods,
+                                      bool* error) {
+  if (io_errors > io_errors_) io_error_utime_ = now_utime;
+  if (missed_periods > missed_) missed_utime_ = now_utime;
+  io_errors_ = io_errors;
+  missed_ = missed_periods;
+  std::string out;
+  *error = false;
+  if (io_error_utime_ && now_utime - *io_error_utime_ < hold_us_) {
+    *error = true;
+    out = "trigger line " + std::to_string(line_) + ": " + std::to_string(io_errors) +
+          " writes failed";
+  }
+  if (missed_utime_ && now_utime - *missed_utime_ < hold_us_) {
+    out += (out.empty() ? "" : "; ") + std::string("trigger: ") + std::to_string(missed_periods) +
+           " periods missed (the machine was busy: run under chrt -f)";
+  }
+  return out;
 }
 
 std::string TriggerMatcher::problem(int64_t now_utime, bool* error) const {
@@ -255,8 +281,9 @@ std::string TriggerMatcher::problem(int64_t now_utime, bool* error) const {
     for (size_t i = 0; i < why.size(); ++i) m += (i ? "; " : "") + why[i];
     m += ")";
     if (most_not) {
-      m += ": is it in external-trigger mode and wired to the trigger line, and is latency_s its "
-           "delay from the pulse?";
+      m += std::string(": is it in external-trigger mode and wired to the trigger line, and is ") +
+           (own_latency_[s] ? std::string(kSide[s]) + "_latency_s" : "latency_s") +
+           " its delay from the pulse?";
     }
     out += (out.empty() ? "" : "; ") + m;
   }
@@ -275,7 +302,7 @@ void TriggerMatcher::addCounters(std::map<std::string, int64_t>* counters) const
         offsets_us.push_back(static_cast<double>(seen.offset_us));
       }
     }
-    // How far after its pulse a frame's grab time minus latency falls: what to add to it.
+    // How far after its pulse a frame's capture time falls: what to add to its latency.
     if (!offsets_us.empty()) {
       (*counters)["trigger_offset_us_p50_" + side] = std::llround(median(offsets_us));
     }

@@ -71,7 +71,8 @@ int abandonedReaders();
 int64_t wallClockUtime();
 
 // A V4L2 buffer's time (CLOCK_MONOTONIC in ms, as OpenCV's CAP_PROP_POS_MSEC gives it after a
-// grab) on the wall clock, when plausible: not after mono_now_ms and at most max_age_ms before.
+// grab, wrapped modulo 2^32 ms where time_t has 32 bits) on the wall clock, when plausible: not
+// after mono_now_ms and at most max_age_ms before.
 // Unlike the grab time it does not move when a frame waited in the driver's queue.
 std::optional<int64_t> bufferTimeToWallUtime(double buffer_ms, double mono_now_ms,
                                              int64_t wall_now_utime, double max_age_ms = 1000);

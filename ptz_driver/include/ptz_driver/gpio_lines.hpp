@@ -28,7 +28,9 @@ class GpioLines {
 
   // `name` is the parameter that chose the line, so that errors name it. Throws ConfigError
   // naming the chip, the line and `name` when the line cannot be had.
-  // Driven to its idle level at once, and left there when the lines are released.
+  // Driven to its idle level at once, and set to it again before the lines are released (what a
+  // released line does then is the kernel driver's: some return it to an input, so pull a
+  // trigger input to its idle level outside).
   virtual void requestOutput(int line, const std::string& name, bool idle_high) = 0;
   void requestOutput(int line, const std::string& name) { requestOutput(line, name, false); }
   virtual void requestEvents(int line, Bias bias, const std::string& name) = 0;

@@ -29,6 +29,7 @@ struct TriggerParams {
   double pulse_s = 0.001;
   bool active_low = false;
   double window_s = 0;  // a frame this near a pulse answers it (0: a quarter of the period)
+  std::array<bool, 2> own_latency{false, false};  // left/right_latency_s set (for the hint)
   bool enabled() const { return !chip.empty(); }
   int64_t windowUs() const;
 };
@@ -100,12 +101,34 @@ class TriggerPulser {
   std::thread thread_;
 };
 
-// Which pulse each live frame answers: the nearest one, when its capture time (grab time minus
-// latency_s) lies within the window of it. Keeps what the status needs to say about each side.
+// The pulser's own troubles for the status: failed writes to the line (an error) and periods it
+// missed (a warning), each reported for hold_s after the last one.
+class TriggerLineHealth {
+ public:
+  TriggerLineHealth(int line, double hold_s)
+      : line_(line), hold_us_(static_cast<int64_t>(hold_s * 1e6)) {}
+  // The counts so far at now_utime: "" or the problems; *error when writes failed.
+  std::string update(int64_t now_utime, int64_t io_errors, int64_t missed_periods, bool* error);
+
+ private:
+  int line_;
+  int64_t hold_us_;
+  int64_t io_errors_ = 0, missed_ = 0;
+  std::optional<int64_t> io_error_utime_, missed_utime_;
+};
+
+// Which pulse each live frame answers: the nearest one, when its capture time (grab or V4L2
+// buffer time minus the camera's latency) lies within the window of it. Keeps what the status
+// needs to say about each side.
 class TriggerMatcher {
  public:
-  TriggerMatcher(const TriggerLog& log, int64_t window_us, double recent_s)
-      : log_(log), window_us_(window_us), recent_us_(static_cast<int64_t>(recent_s * 1e6)) {}
+  // own_latency: whether each camera has its own latency parameter (for the status's hint).
+  TriggerMatcher(const TriggerLog& log, int64_t window_us, double recent_s,
+                 std::array<bool, 2> own_latency = {false, false})
+      : log_(log),
+        window_us_(window_us),
+        recent_us_(static_cast<int64_t>(recent_s * 1e6)),
+        own_latency_(own_latency) {}
   // The pulse's time, or nullopt (then the frame is not used): no pulse near, or the side's
   // previous frame already answered that pulse.
   std::optional<int64_t> match(Side side, int64_t capture_utime, int64_t now_utime);
@@ -122,6 +145,7 @@ class TriggerMatcher {
   };
   const TriggerLog& log_;
   int64_t window_us_, recent_us_;
+  std::array<bool, 2> own_latency_;
   std::array<std::deque<Seen>, 2> recent_;
   std::array<std::optional<int64_t>, 2> last_pulse_;
   std::array<int64_t, 2> last_epoch_{0, 0};
