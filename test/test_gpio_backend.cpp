@@ -6,7 +6,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <thread>
 
 #include "ptz/plant.hpp"
 #include "ptz_driver/gpio_factory.hpp"
@@ -32,16 +31,6 @@ std::string errorOf(const ptz::Params& p) {
     return e.what();
   }
   return "(no error)";
-}
-
-// Polls until done() or the timeout (the head runs on its own thread).
-bool waitFor(const std::function<bool()>& done, double timeout_s) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  return true;
 }
 
 std::string run(const std::string& command) {
@@ -131,8 +120,10 @@ TEST(GpioBackend, BothHeadsHomeInRealTimeOnTheSimulatedChip) {
   p.set("gpio_chip", "sim");
   auto heads = makeHeads(p);
   for (auto& h : heads) h->start(0);
+  // Looked at after each step of the left head's thread (both step every millisecond).
+  const auto& left = dynamic_cast<const GpioHead&>(*heads[0]);
   // 0.3 rad to the min switch at 0.3 rad/s (pan) and 0.2 rad/s (tilt): 1 and 1.5 s.
-  ASSERT_TRUE(waitFor([&] { return heads[0]->measured() && heads[1]->measured(); }, 5));
+  ASSERT_TRUE(left.waitForStep([&] { return heads[0]->measured() && heads[1]->measured(); }, 5));
   for (auto& h : heads) {
     // Homed, and on the way from the switches back to 0 (at 0.3 and 0.2 rad/s: 10 and 3.5 s);
     // where exactly depends on when this thread ran (the stepped test above has the numbers).
@@ -150,7 +141,7 @@ TEST(GpioBackend, BothHeadsHomeInRealTimeOnTheSimulatedChip) {
     return std::abs(h.measured()->pan_rad + 2.5) <= 3e-3 &&
            std::abs(h.measured()->tilt_rad - 0.2) <= 3e-3;
   };
-  EXPECT_TRUE(waitFor([&] { return there(*heads[0]) && there(*heads[1]); }, 3));
+  EXPECT_TRUE(left.waitForStep([&] { return there(*heads[0]) && there(*heads[1]); }, 3));
 }
 
 TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
@@ -162,13 +153,13 @@ TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
   chip->useClock(gpioClockS);
   GpioHead head(c, std::move(fake), true);
   head.start(0);
-  ASSERT_TRUE(waitFor([&] { return head.measured().has_value(); }, 3));
+  ASSERT_TRUE(head.waitForStep([&] { return head.measured().has_value(); }, 3));
   head.command(PtzPose{0.9, 0, 1}, 0);
   // Saturated at duty 0.3 (1.2 rad/s) all the way: measure between -0.9 and -0.3 rad.
-  ASSERT_TRUE(waitFor([&] { return chip->positionRad(0) > -0.9; }, 3));
+  ASSERT_TRUE(head.waitForStep([&] { return chip->positionRad(0) > -0.9; }, 3));
   head.takeWakeLatenessS();
   const FakeGpio::OutputTally from = chip->tally(1);
-  ASSERT_TRUE(waitFor([&] { return chip->positionRad(0) > -0.3; }, 3));
+  ASSERT_TRUE(head.waitForStep([&] { return chip->positionRad(0) > -0.3; }, 3));
   const FakeGpio::OutputTally to = chip->tally(1);
   std::vector<double> late_s = head.takeWakeLatenessS();
   std::sort(late_s.begin(), late_s.end());
@@ -190,7 +181,7 @@ TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
   head.stop(0, 0.1);
   EXPECT_FALSE(chip->level(1));
   const double stopped_s = chip->nowS(), high_at_stop = chip->highTimeS(1);
-  ASSERT_TRUE(waitFor([&] { return chip->nowS() > stopped_s + 0.2; }, 3));
+  ASSERT_TRUE(head.waitForStep([&] { return chip->nowS() > stopped_s + 0.2; }, 3));
   EXPECT_EQ(chip->highTimeS(1), high_at_stop);
   EXPECT_FALSE(chip->level(1));
 }

@@ -122,6 +122,15 @@ std::vector<double> GpioHead::takeWakeLatenessS() {
 // Sleeps until each step is due, minus the median lateness of a wake-up (learnt as it goes: a
 // microsecond up when late, down when early, so that stalls do not pull it), so that PWM edges
 // land on time as often late as early; a step woken early runs for the time it was due.
+bool GpioHead::waitForStep(const std::function<bool()>& done, double timeout_s) const {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  std::unique_lock<std::mutex> lock(step_mutex_);
+  while (!done()) {
+    if (stepped_.wait_until(lock, end) == std::cv_status::timeout) return done();
+  }
+  return true;
+}
+
 void GpioHead::run() {
   const double max_lead_s = 0.25 / std::max(config_.pan.pwm_hz, config_.tilt.pwm_hz);
   double due_s = gpioClockS(), lead_s = 0;
@@ -133,6 +142,10 @@ void GpioHead::run() {
       std::lock_guard<std::mutex> lock(mutex_);
       if (lateness_s_.size() < kMaxLatenessSamples) lateness_s_.push_back(now_s - due_s);
     }
+    {
+      std::lock_guard<std::mutex> lock(step_mutex_);  // a waiter between look and wait hears it
+    }
+    stepped_.notify_all();
     due_s = next_s;
     sleepUntil(due_s - lead_s);
   }

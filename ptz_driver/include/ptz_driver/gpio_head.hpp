@@ -6,6 +6,8 @@
 
 #include <array>
 #include <atomic>
+#include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -55,6 +57,9 @@ class GpioHead : public PtzHead {
   // How late (< 0: early) each step of the control thread ran against when it was due: the
   // jitter of the PWM edges. Since the last call.
   std::vector<double> takeWakeLatenessS();
+  // Threaded: blocks until done() holds, looking again after each step of the control thread
+  // (the only thing that moves the head), at most timeout_s; returns done().
+  bool waitForStep(const std::function<bool()>& done, double timeout_s) const;
 
  private:
   double nowS(double given_s) const;
@@ -72,6 +77,8 @@ class GpioHead : public PtzHead {
   bool threaded_;
   std::atomic<bool> quit_{false};
   std::thread thread_;
+  mutable std::mutex step_mutex_;  // apart from mutex_: done() may call measured()
+  mutable std::condition_variable stepped_;
 };
 
 }  // namespace ptz::driver
