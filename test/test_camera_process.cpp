@@ -292,9 +292,11 @@ TEST(CameraProcess, WithATriggerLineCamerasThatDoNotFollowItAreNamed) {
       lcm, [&] { return l.counters["trigger_pulses"] >= pulses + 15; }, 10s))
       << "the pulses stopped at " << l.counters["trigger_pulses"];
   EXPECT_EQ(camera.stop(), 0);
-  std::printf("trigger: %lld pulses, %lld missed periods; %s\n",
+  std::printf("trigger: %lld pulses, %lld missed periods, edges late p50 %lld us p99 %lld us; %s\n",
               static_cast<long long>(l.counters["trigger_pulses"]),
-              static_cast<long long>(l.counters["trigger_missed_periods"]), l.message.c_str());
+              static_cast<long long>(l.counters["trigger_missed_periods"]),
+              static_cast<long long>(l.counters["trigger_late_us_p50"]),
+              static_cast<long long>(l.counters["trigger_late_us_p99"]), l.message.c_str());
 }
 
 TEST(CameraProcess, ATriggerChipThatDoesNotExistExitsTwoNamingIt) {

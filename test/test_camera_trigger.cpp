@@ -132,6 +132,12 @@ TEST(CameraTrigger, APeriodStartedTooLateIsSkippedAndCountedNotPulsedLate) {
   p.pulser->run(1);
   EXPECT_EQ(p.pulser->missedPeriods(), 1);
   EXPECT_EQ(p.log.nearest(pulseUtime(30))->offset_us, -4'000);
+  // Every edge's lateness: 29 on time, then the one 4 ms late (the skipped period has none).
+  const std::vector<double> late_s = p.pulser->takeEdgeLatenessS();
+  ASSERT_EQ(late_s.size(), 30u);
+  for (size_t k = 0; k < 29; ++k) EXPECT_NEAR(late_s[k], 0, 1e-9) << k;
+  EXPECT_NEAR(late_s[29], 0.004, 1e-9);
+  EXPECT_TRUE(p.pulser->takeEdgeLatenessS().empty());
   EXPECT_NEAR(p.chip.tally(kLine).high_s - high_before_s, 0.002, 2e-4);
 }
 

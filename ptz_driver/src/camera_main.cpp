@@ -135,6 +135,14 @@ class CameraNode {
       status_.setCounter("trigger_pulses", pulses_.pulses());
       status_.setCounter("trigger_missed_periods", pulser_->missedPeriods());
       status_.setCounter("trigger_io_errors", trigger_chip_->ioErrors());
+      for (double late_s : pulser_->takeEdgeLatenessS()) edge_late_ms_.push_back(late_s * 1e3);
+      if (edge_late_ms_.size() >= 30) {  // how late the edges came after their periods' starts
+        status_.setCounter("trigger_late_us_p50",
+                           std::llround(percentile(edge_late_ms_, 50) * 1e3));
+        status_.setCounter("trigger_late_us_p99",
+                           std::llround(percentile(edge_late_ms_, 99) * 1e3));
+        edge_late_ms_.clear();
+      }
     }
     if (wait_ms_.size() >= 30) {  // from the first frame of a pair arriving to its publication
       status_.setCounter("pair_wait_us_p50", std::llround(percentile(wait_ms_, 50) * 1000));
@@ -181,7 +189,7 @@ class CameraNode {
   std::optional<TriggerLineHealth> trigger_health_;
   std::unique_ptr<StereoCamera> camera_;
   int64_t seq_ = 0;
-  std::vector<double> wait_ms_, ptz_wait_ms_;
+  std::vector<double> wait_ms_, ptz_wait_ms_, edge_late_ms_;
 };
 
 }  // namespace

@@ -184,10 +184,22 @@ void TriggerPulser::period(int64_t k) {
   const int64_t before_utime = clock_.wall_utime();
   drive(true);
   const double edge_s = clock_.now_s();
+  {
+    std::lock_guard<std::mutex> lock(lateness_mutex_);
+    lateness_s_.push_back(edge_s - t_s);
+    if (lateness_s_.size() > 10000) lateness_s_.pop_front();
+  }
   log_.add((before_utime + clock_.wall_utime()) / 2);
   // Full width from the edge, however late it came.
   clock_.sleep_until_s(edge_s + params_.pulse_s);
   drive(false);
+}
+
+std::vector<double> TriggerPulser::takeEdgeLatenessS() {
+  std::lock_guard<std::mutex> lock(lateness_mutex_);
+  std::vector<double> out(lateness_s_.begin(), lateness_s_.end());
+  lateness_s_.clear();
+  return out;
 }
 
 std::optional<int64_t> TriggerMatcher::match(Side side, int64_t capture_utime, int64_t now_utime) {

@@ -15,6 +15,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "ptz/config.hpp"
 #include "ptz/rig.hpp"  // Side
@@ -85,6 +86,9 @@ class TriggerPulser {
   // Pulses `periods` periods on the calling thread (tests with a simulated clock).
   void run(int64_t periods);
   int64_t missedPeriods() const { return missed_; }
+  // How late each edge came after its period's start (the jitter a camera sees), since the last
+  // call; at most the last 10000.
+  std::vector<double> takeEdgeLatenessS();
 
  private:
   void period(int64_t k);
@@ -99,6 +103,8 @@ class TriggerPulser {
   std::atomic<int64_t> missed_{0};
   std::atomic<bool> stop_{false};
   std::thread thread_;
+  std::mutex lateness_mutex_;
+  std::deque<double> lateness_s_;
 };
 
 // The pulser's own troubles for the status: failed writes to the line (an error) and periods it
