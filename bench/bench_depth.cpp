@@ -1,6 +1,7 @@
 // ptz-depth's frame on rendered VGA stereo frames of the default scenario, 64 disparities, with
 // OpenCV's threads on all cores: the bare cv::StereoBM::compute on the same rectified pair, and
-// the full frame (rectify + match + reproject + cloud filtering), median and p99.
+// the full frame (rectify + match + reproject + outlier filter + cloud), median and p99, and the
+// full frame without the pixel-grid outlier filter.
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -36,11 +37,15 @@ int main(int argc, char** argv) {
   const perception::DepthParams params = perception::DepthParams::fromParams(p);
   const perception::CloudParams cloud_params = perception::CloudParams::fromParams(p);
   perception::DepthEstimator estimator(rig, params);
+  // The same without the pixel-grid outlier filter: what the filter costs, in the same run.
+  perception::DepthParams unfiltered_params = params;
+  unfiltered_params.outlier_stddev_mult = 0;
+  perception::DepthEstimator unfiltered(rig, unfiltered_params);
   // The same BM, called bare.
   perception::MatcherParams bare_params = params.matcher;
   perception::DisparityMatcher bare(bare_params);
 
-  std::vector<double> full_ms, bare_ms, cloud_ms;
+  std::vector<double> full_ms, bare_ms, cloud_ms, unfiltered_ms;
   size_t points = 0;
   for (int i = 0; i < frames; ++i) {
     sim.advanceTo(i / 30.0);
@@ -59,6 +64,11 @@ int main(int argc, char** argv) {
     full_ms.push_back(ms(t2 - t0));
     cloud_ms.push_back(ms(t2 - t1));
     points += static_cast<size_t>(cloud.width);
+    perception::DepthFrame plain;
+    const auto u0 = Clock::now();
+    unfiltered.process(f.left, f.right, f.left_pose, f.right_pose, std::nullopt, &plain, &why);
+    perception::makeCloud(plain.points_head_m, plain.colours_bgr, cloud_params);
+    unfiltered_ms.push_back(ms(Clock::now() - u0));
 
     // The rectified pair the full frame matched, then the bare StereoBM on it.
     const perception::Rectification& r = estimator.rectifier().current();
@@ -77,9 +87,12 @@ int main(int argc, char** argv) {
             : "bare cv::StereoSGBM::compute (rectified pair)",
          bare_ms);
   report("full ptz-depth frame (rectify+match+reproject+cloud)", full_ms);
-  report("  of which the cloud (voxel grid + outlier removal)", cloud_ms);
+  report("  of which the cloud (voxel grid, PCL SOR if on)", cloud_ms);
+  report("full frame without the pixel-grid outlier filter", unfiltered_ms);
   std::printf("%-52s %.2f x\n", "  full / bare (medians)",
               ptz::percentile(full_ms, 50) / ptz::percentile(bare_ms, 50));
+  std::printf("%-52s %.2f x\n", "  full / without the grid filter (medians)",
+              ptz::percentile(full_ms, 50) / ptz::percentile(unfiltered_ms, 50));
   std::printf("%-52s %.1f\n", "  full frames/s (median)", 1000.0 / ptz::percentile(full_ms, 50));
   std::printf("%-52s %zu\n", "  points per cloud (mean)", points / full_ms.size());
   return 0;

@@ -230,6 +230,7 @@ TEST(Cloud, PclLayoutVoxelGridAndOutlierRemoval) {
   colours.emplace_back(10, 20, 30);
   perception::CloudParams p;
   p.voxel_size_m = 0.02;
+  p.sor_mean_k = 8;  // PCL's statistical outlier removal (off by default: ptz-depth's grid filter)
   const ptzstereo::point_cloud_t c = perception::makeCloud(points, colours, p);
   EXPECT_EQ(c.frame_id, "head");
   EXPECT_EQ(c.height, 1);
@@ -251,6 +252,48 @@ TEST(Cloud, PclLayoutVoxelGridAndOutlierRemoval) {
   uint32_t rgb = 0;
   std::memcpy(&rgb, c.data.data() + 16, 4);
   EXPECT_EQ(rgb & 0xffffffu, (30u << 16) | (20u << 8) | 10u);
+}
+
+TEST(Cloud, GridOutliersAreDroppedWhateverTheRange) {
+  // A 20 x 20 sampling grid: a plane at 2 m (1 cm apart) in the left half and one at 8 m (4 cm
+  // apart: the same angle) in the right, a gap column between them; a flying point at 5 m in
+  // the near plane and a point with no neighbours. Colours follow their points.
+  const int cols = 20;
+  std::vector<int> cell(static_cast<size_t>(cols) * cols, -1);
+  std::vector<cv::Point3f> points;
+  std::vector<cv::Vec3b> colours;
+  std::vector<float> ranges;
+  auto put = [&](int gx, int gy, cv::Point3f p) {
+    cell[static_cast<size_t>(gy) * cols + gx] = static_cast<int>(points.size());
+    points.push_back(p);
+    colours.emplace_back(static_cast<uchar>(gx), static_cast<uchar>(gy), 0);
+    ranges.push_back(static_cast<float>(cv::norm(p)));
+  };
+  for (int gy = 0; gy < 18; ++gy) {
+    for (int gx = 0; gx < cols; ++gx) {
+      if (gx == 9) continue;  // the gap
+      const bool near = gx < 9;
+      const float z = near ? 2.0f : 8.0f, step = z * 0.005f;
+      if (near && gx == 4 && gy == 8) {
+        put(gx, gy, {(gx - 10) * step, (gy - 10) * step, 5.0f});  // flying
+      } else {
+        put(gx, gy, {(gx - 10) * step, (gy - 10) * step, z});
+      }
+    }
+  }
+  put(10, 19, {0.0f, 0.4f, 8.0f});  // alone: row 18 is empty
+  const size_t before = points.size();
+  perception::removeGridOutliers(cell, cols, ranges, 2.0, &points, &colours);
+  ASSERT_EQ(points.size(), colours.size());
+  EXPECT_EQ(points.size(), before - 2);
+  for (size_t i = 0; i < points.size(); ++i) {
+    EXPECT_NE(points[i].z, 5.0f) << "the flying point";
+    EXPECT_FALSE(colours[i][0] == 10 && colours[i][1] == 19) << "the lonely point";
+    // Its colour is still its own: x and y say where on the grid it came from.
+    const float step = points[i].z * 0.005f;
+    EXPECT_NEAR(points[i].x / step + 10, colours[i][0], 1e-3);
+    EXPECT_NEAR(points[i].y / step + 10, colours[i][1], 1e-3);
+  }
 }
 
 TEST(Cloud, PcdWrittenOrAClearError) {

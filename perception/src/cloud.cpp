@@ -19,7 +19,9 @@ namespace ptz::perception {
 
 void declareCloudParams(Params& p) {
   p.add("voxel_size_m", 0.05, "m", "voxel grid leaf size (<= 0: no downsampling)");
-  p.add("sor_mean_k", 8, "", "statistical outlier removal: neighbours (0: off)");
+  p.add("sor_mean_k", 0, "",
+        "PCL's statistical outlier removal on the cloud: neighbours (0: off; costs ~2.7 us a "
+        "point, outlier_stddev_mult does it on the pixel grid for far less)");
   p.add("sor_stddev_mult", 2.0, "",
         "statistical outlier removal: drop points this many standard deviations away");
 }

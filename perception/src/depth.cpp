@@ -4,6 +4,8 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/ximgproc/disparity_filter.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -201,11 +203,15 @@ bool DepthEstimator::process(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
   std::vector<cv::Point3f> xyd;
   out->colours_bgr.clear();
   const cv::Mat& disp = out->disparity_16s;
+  const int grid_cols = (disp.cols + stride - 1) / stride;
+  cell_.assign(static_cast<size_t>(grid_cols) * ((disp.rows + stride - 1) / stride), -1);
   for (int y = 0; y < disp.rows; y += stride) {
     const short* d = disp.ptr<short>(y);
     const cv::Vec3b* c = out->left_rectified_bgr.ptr<cv::Vec3b>(y);
     for (int x = 0; x < disp.cols; x += stride) {
       if (d[x] < d_lo || d[x] > d_hi) continue;
+      cell_[static_cast<size_t>(y / stride) * grid_cols + x / stride] =
+          static_cast<int>(xyd.size());
       xyd.emplace_back(static_cast<float>(x), static_cast<float>(y), d[x] / 16.0f);
       out->colours_bgr.push_back(c[x]);
     }
@@ -219,7 +225,86 @@ bool DepthEstimator::process(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
   const cv::Mat M = H * r.Q;
   out->points_head_m.clear();
   if (!xyd.empty()) cv::perspectiveTransform(xyd, out->points_head_m, M);
+  if (params_.outlier_stddev_mult > 0) {
+    // Range from the rectified left camera: grid neighbours lie farther apart the farther away.
+    std::vector<float> ranges(out->points_head_m.size());
+    const cv::Point3f origin(static_cast<float>(r.position_head_m.x()),
+                             static_cast<float>(r.position_head_m.y()),
+                             static_cast<float>(r.position_head_m.z()));
+    for (size_t i = 0; i < ranges.size(); ++i) {
+      ranges[i] = static_cast<float>(cv::norm(out->points_head_m[i] - origin));
+    }
+    removeGridOutliers(cell_, grid_cols, ranges, params_.outlier_stddev_mult, &out->points_head_m,
+                       &out->colours_bgr);
+  }
   return true;
+}
+
+void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& ranges,
+                        double stddev_mult, std::vector<cv::Point3f>* points,
+                        std::vector<cv::Vec3b>* colours) {
+  const std::vector<cv::Point3f>& p = *points;
+  const int rows = cols > 0 ? static_cast<int>(cell.size()) / cols : 0;
+  // Per grid direction (horizontal, vertical, two diagonals) the distance to the nearer of the
+  // two neighbours that way: an outlier on one side, or a surface's edge, leaves the other.
+  constexpr float kNone = std::numeric_limits<float>::infinity();
+  std::vector<std::array<float, 4>> nearer(p.size(), {kNone, kNone, kNone, kNone});
+  constexpr int kForward[4][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}};  // (dx, dy) per direction
+  for (int gy = 0; gy < rows; ++gy) {
+    for (int gx = 0; gx < cols; ++gx) {
+      const int i = cell[static_cast<size_t>(gy) * cols + gx];
+      if (i < 0) continue;
+      for (size_t k = 0; k < 4; ++k) {
+        const int x = gx + kForward[k][0], y = gy + kForward[k][1];
+        if (y >= rows || x < 0 || x >= cols) continue;
+        const int j = cell[static_cast<size_t>(y) * cols + x];
+        if (j < 0) continue;
+        const cv::Point3f d = p[static_cast<size_t>(i)] - p[static_cast<size_t>(j)];
+        const float len = std::sqrt(d.dot(d));
+        float& a = nearer[static_cast<size_t>(i)][k];
+        float& b = nearer[static_cast<size_t>(j)][k];
+        a = std::min(a, len);
+        b = std::min(b, len);
+      }
+    }
+  }
+  // Each point's mean of those over its range, as PCL's SOR takes its k nearest; none: isolated
+  // (dropped).
+  std::vector<double> spread(p.size(), std::numeric_limits<double>::infinity());
+  double sum = 0, sum_sq = 0;
+  int64_t n = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    double total = 0;
+    int k = 0;
+    for (float len : nearer[i]) {
+      if (len == kNone) continue;
+      total += len;
+      ++k;
+    }
+    if (k == 0 || !(ranges[i] > 0)) continue;
+    const double s = total / k / ranges[i];
+    spread[i] = s;
+    sum += s;
+    sum_sq += s * s;
+    ++n;
+  }
+  if (n == 0) {
+    points->clear();
+    colours->clear();
+    return;
+  }
+  const double mean = sum / static_cast<double>(n);
+  const double var = std::max(0.0, sum_sq / static_cast<double>(n) - mean * mean);
+  const double limit = mean + stddev_mult * std::sqrt(var);
+  size_t kept = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    if (!(spread[i] <= limit)) continue;
+    (*points)[kept] = (*points)[i];
+    (*colours)[kept] = (*colours)[i];
+    ++kept;
+  }
+  points->resize(kept);
+  colours->resize(kept);
 }
 
 }  // namespace ptz::perception

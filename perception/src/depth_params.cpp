@@ -30,6 +30,10 @@ void declareDepthParams(Params& p) {
   p.add("max_depth_m", 20.0, "m", "farthest reconstructed depth");
   p.add("cloud_stride_px", 4, "px",
         "reproject every n-th pixel in x and y (the voxel grid would merge them anyway)");
+  p.add("outlier_stddev_mult", 1.0, "",
+        "drop points whose distance to their nearer pixel-grid neighbour in each direction "
+        "(mean, relative to range) is this many standard deviations above the frame's mean "
+        "(0: off)");
 }
 
 DepthParams DepthParams::fromParams(const Params& p) {
@@ -56,6 +60,10 @@ DepthParams DepthParams::fromParams(const Params& p) {
   d.min_depth_m = p.getDouble("min_depth_m");
   d.max_depth_m = p.getDouble("max_depth_m");
   d.cloud_stride_px = p.getInt("cloud_stride_px");
+  d.outlier_stddev_mult = p.getDouble("outlier_stddev_mult");
+  if (!(d.outlier_stddev_mult >= 0)) {
+    throw ConfigError("parameter 'outlier_stddev_mult' must be >= 0");
+  }
   if (m.prefilter_size_px < 5 || m.prefilter_size_px % 2 == 0) {
     throw ConfigError("parameter 'prefilter_size_px' must be odd and >= 5");
   }

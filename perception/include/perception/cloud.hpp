@@ -18,7 +18,8 @@ namespace ptz::perception {
 
 struct CloudParams {
   double voxel_size_m = 0.05;  // <= 0: no downsampling
-  int sor_mean_k = 8;          // neighbours of statistical outlier removal (0: off)
+  int sor_mean_k = 0;          // neighbours of PCL's statistical outlier removal (0: off; ptz-depth
+                               // removes outliers on its pixel grid instead, outlier_stddev_mult)
   double sor_stddev_mult = 2.0;
 
   static CloudParams fromParams(const Params& params);

@@ -115,12 +115,24 @@ struct DepthParams {
   double min_depth_m = 0.3;   // points nearer or farther are dropped
   double max_depth_m = 20.0;  // (depth along the rectified left axis)
   int cloud_stride_px = 4;    // reproject every n-th pixel in x and y
+  // Statistical outlier removal on the sampling grid: a point whose spread (the mean, over the
+  // grid's four directions, of the distance to the nearer neighbour that way, relative to its
+  // range) is this many standard deviations above the frame's mean is dropped, as is a point
+  // without neighbours (0: off).
+  double outlier_stddev_mult = 1.0;
 
   // Reads the parameters declared by declareDepthParams (errors name the parameter).
   static DepthParams fromParams(const Params& params);
 };
 // Declares the parameters of DepthParams with their defaults, units and help.
 void declareDepthParams(Params& params);
+
+// Drops the grid outliers of outlier_stddev_mult (above) from points and colours. cell: for each
+// node of a grid of `cols` columns (row-major), the index of its point or -1; ranges: each
+// point's distance from the camera.
+void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& ranges,
+                        double stddev_mult, std::vector<cv::Point3f>* points,
+                        std::vector<cv::Vec3b>* colours);
 
 // Valid disparities of one frame as head-frame points with the left image's colour.
 struct DepthFrame {
@@ -148,6 +160,7 @@ class DepthEstimator {
   Rectifier rectifier_;
   DisparityMatcher matcher_;
   cv::Mat left_gray_, right_gray_, right_rect_;  // scratch
+  std::vector<int> cell_;                        // sampling grid -> point index
 };
 
 }  // namespace ptz::perception
