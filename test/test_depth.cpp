@@ -254,46 +254,68 @@ TEST(Cloud, PclLayoutVoxelGridAndOutlierRemoval) {
   EXPECT_EQ(rgb & 0xffffffu, (30u << 16) | (20u << 8) | 10u);
 }
 
-TEST(Cloud, GridOutliersAreDroppedWhateverTheRange) {
-  // A 20 x 20 sampling grid: a plane at 2 m (1 cm apart) in the left half and one at 8 m (4 cm
-  // apart: the same angle) in the right, a gap column between them; a flying point at 5 m in
-  // the near plane and a point with no neighbours. Colours follow their points.
-  const int cols = 20;
-  std::vector<int> cell(static_cast<size_t>(cols) * cols, -1);
+TEST(Cloud, GridOutliersAreDroppedWhateverTheDepthOrTheAngle) {
+  // A 40 x 20 sampling grid of a camera (f = 500 px, every 4th pixel, so 1/125 rad a step): a
+  // wall at 2 m across 32 columns (up to 24 degrees off the axis) and one at 8 m in 7 (its
+  // neighbours 4 times as far apart), a gap column between them; a flying point at 5 m in
+  // front of the near wall, and a point with no neighbours. At the default 1 sigma only those
+  // two go: spread is measured against depth, not range (which would favour the centre) or
+  // nothing (which would drop the far wall).
+  const int cols = 40, rows = 20;
+  const float step = 1.0f / 125;
+  std::vector<int> cell(static_cast<size_t>(cols) * rows, -1);
   std::vector<cv::Point3f> points;
   std::vector<cv::Vec3b> colours;
-  std::vector<float> ranges;
-  auto put = [&](int gx, int gy, cv::Point3f p) {
+  std::vector<float> depths;
+  auto put = [&](int gx, int gy, float z) {
     cell[static_cast<size_t>(gy) * cols + gx] = static_cast<int>(points.size());
-    points.push_back(p);
+    points.emplace_back((gx - 16) * step * z, (gy - 10) * step * z, z);
     colours.emplace_back(static_cast<uchar>(gx), static_cast<uchar>(gy), 0);
-    ranges.push_back(static_cast<float>(cv::norm(p)));
+    depths.push_back(z);
   };
-  for (int gy = 0; gy < 18; ++gy) {
-    for (int gx = 0; gx < cols; ++gx) {
-      if (gx == 9) continue;  // the gap
-      const bool near = gx < 9;
-      const float z = near ? 2.0f : 8.0f, step = z * 0.005f;
-      if (near && gx == 4 && gy == 8) {
-        put(gx, gy, {(gx - 10) * step, (gy - 10) * step, 5.0f});  // flying
-      } else {
-        put(gx, gy, {(gx - 10) * step, (gy - 10) * step, z});
+  auto walls = [&](bool with_outliers) {
+    cell.assign(cell.size(), -1);
+    points.clear();
+    colours.clear();
+    depths.clear();
+    for (int gy = 0; gy < 18; ++gy) {
+      for (int gx = 0; gx < cols; ++gx) {
+        if (gx == 32) continue;  // the gap
+        const bool flying = with_outliers && gx == 20 && gy == 8;
+        put(gx, gy, gx < 32 ? (flying ? 5.0f : 2.0f) : 8.0f);
       }
     }
-  }
-  put(10, 19, {0.0f, 0.4f, 8.0f});  // alone: row 18 is empty
+    if (with_outliers) put(36, 19, 8.0f);  // alone: row 18 is empty
+  };
+  const perception::DepthParams defaults;
+  // The walls alone: nothing to drop (the flying point would hide the rest in its variance).
+  walls(false);
+  const size_t wall_points = points.size();
+  EXPECT_EQ(perception::removeGridOutliers(cell, cols, depths, defaults.outlier_stddev_mult,
+                                           &points, &colours),
+            0u);
+  EXPECT_EQ(points.size(), wall_points);
+  walls(true);
   const size_t before = points.size();
-  perception::removeGridOutliers(cell, cols, ranges, 2.0, &points, &colours);
-  ASSERT_EQ(points.size(), colours.size());
-  EXPECT_EQ(points.size(), before - 2);
+  EXPECT_EQ(perception::removeGridOutliers(cell, cols, depths, defaults.outlier_stddev_mult,
+                                           &points, &colours),
+            2u);
+  ASSERT_EQ(points.size(), before - 2);
+  ASSERT_EQ(colours.size(), points.size());
   for (size_t i = 0; i < points.size(); ++i) {
     EXPECT_NE(points[i].z, 5.0f) << "the flying point";
-    EXPECT_FALSE(colours[i][0] == 10 && colours[i][1] == 19) << "the lonely point";
+    EXPECT_FALSE(colours[i][0] == 36 && colours[i][1] == 19) << "the lonely point";
     // Its colour is still its own: x and y say where on the grid it came from.
-    const float step = points[i].z * 0.005f;
-    EXPECT_NEAR(points[i].x / step + 10, colours[i][0], 1e-3);
-    EXPECT_NEAR(points[i].y / step + 10, colours[i][1], 1e-3);
+    EXPECT_NEAR(points[i].x / (step * points[i].z) + 16, colours[i][0], 1e-3);
+    EXPECT_NEAR(points[i].y / (step * points[i].z) + 10, colours[i][1], 1e-3);
   }
+  // Too few points for statistics: all kept.
+  std::vector<int> small_cell = {0, 1, -1, 2};
+  std::vector<cv::Point3f> small = {{0, 0, 2}, {0.1f, 0, 2}, {0, 0, 9}};
+  std::vector<cv::Vec3b> small_colours(3);
+  EXPECT_EQ(perception::removeGridOutliers(small_cell, 2, {2, 2, 9}, 1.0, &small, &small_colours),
+            0u);
+  EXPECT_EQ(small.size(), 3u);
 }
 
 TEST(Cloud, PcdWrittenOrAClearError) {

@@ -129,9 +129,7 @@ TEST(DepthSim, SphereCloudFitsTheTrueRadiusWithinFivePercent) {
       perception::DepthParams dp;
       dp.matcher.mode = mode;
       dp.cloud_stride_px = 1;
-      // Every pixel and a finer voxel than the process's default, and no outlier filter (it
-      // takes points seen at a grazing angle): the fit needs the limb.
-      dp.outlier_stddev_mult = 0;
+      // Every pixel and a finer voxel than the process's default: the fit needs the limb.
       perception::CloudParams cp;
       cp.voxel_size_m = 0.005;
       const std::vector<cv::Point3f> points = cloudOf(rig, scene, c, dp, cp);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "ptz/config.hpp"
@@ -226,25 +227,30 @@ bool DepthEstimator::process(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
   out->points_head_m.clear();
   if (!xyd.empty()) cv::perspectiveTransform(xyd, out->points_head_m, M);
   if (params_.outlier_stddev_mult > 0) {
-    // Range from the rectified left camera: grid neighbours lie farther apart the farther away.
-    std::vector<float> ranges(out->points_head_m.size());
-    const cv::Point3f origin(static_cast<float>(r.position_head_m.x()),
-                             static_cast<float>(r.position_head_m.y()),
-                             static_cast<float>(r.position_head_m.z()));
-    for (size_t i = 0; i < ranges.size(); ++i) {
-      ranges[i] = static_cast<float>(cv::norm(out->points_head_m[i] - origin));
+    // Depth along the rectified axis (from Q and the disparity): the grid's spacing on a
+    // surface facing the camera grows with it.
+    const double q23 = r.Q.at<double>(2, 3), q32 = r.Q.at<double>(3, 2), q33 = r.Q.at<double>(3, 3);
+    std::vector<float> depths(xyd.size());
+    for (size_t i = 0; i < xyd.size(); ++i) {
+      depths[i] = static_cast<float>(std::abs(q23 / (q32 * xyd[i].z + q33)));
     }
-    removeGridOutliers(cell_, grid_cols, ranges, params_.outlier_stddev_mult, &out->points_head_m,
-                       &out->colours_bgr);
+    out->outliers_dropped =
+        removeGridOutliers(cell_, grid_cols, depths, params_.outlier_stddev_mult,
+                           &out->points_head_m, &out->colours_bgr);
   }
   return true;
 }
 
-void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& ranges,
-                        double stddev_mult, std::vector<cv::Point3f>* points,
-                        std::vector<cv::Vec3b>* colours) {
+// Fewer points than this with neighbours: no statistics, all kept.
+constexpr size_t kMinGridOutlierPoints = 10;
+
+size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& depths,
+                          double stddev_mult, std::vector<cv::Point3f>* points,
+                          std::vector<cv::Vec3b>* colours) {
   const std::vector<cv::Point3f>& p = *points;
-  const int rows = cols > 0 ? static_cast<int>(cell.size()) / cols : 0;
+  CV_Assert(cols > 0 && cell.size() % static_cast<size_t>(cols) == 0);
+  CV_Assert(depths.size() == p.size() && colours->size() == p.size());
+  const int rows = static_cast<int>(cell.size()) / cols;
   // Per grid direction (horizontal, vertical, two diagonals) the distance to the nearer of the
   // two neighbours that way: an outlier on one side, or a surface's edge, leaves the other.
   constexpr float kNone = std::numeric_limits<float>::infinity();
@@ -259,8 +265,10 @@ void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vecto
         if (y >= rows || x < 0 || x >= cols) continue;
         const int j = cell[static_cast<size_t>(y) * cols + x];
         if (j < 0) continue;
+        CV_DbgAssert(static_cast<size_t>(i) < p.size() && static_cast<size_t>(j) < p.size());
         const cv::Point3f d = p[static_cast<size_t>(i)] - p[static_cast<size_t>(j)];
-        const float len = std::sqrt(d.dot(d));
+        // Per grid step: a diagonal step is sqrt(2) steps long.
+        const float len = std::sqrt(d.dot(d)) * (k < 2 ? 1.0f : 0.70710678f);
         float& a = nearer[static_cast<size_t>(i)][k];
         float& b = nearer[static_cast<size_t>(j)][k];
         a = std::min(a, len);
@@ -268,11 +276,11 @@ void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vecto
       }
     }
   }
-  // Each point's mean of those over its range, as PCL's SOR takes its k nearest; none: isolated
+  // Each point's mean of those over its depth, as PCL's SOR takes its k nearest; none: isolated
   // (dropped).
   std::vector<double> spread(p.size(), std::numeric_limits<double>::infinity());
-  double sum = 0, sum_sq = 0;
-  int64_t n = 0;
+  std::vector<double> finite;
+  finite.reserve(p.size());
   for (size_t i = 0; i < p.size(); ++i) {
     double total = 0;
     int k = 0;
@@ -281,21 +289,18 @@ void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vecto
       total += len;
       ++k;
     }
-    if (k == 0 || !(ranges[i] > 0)) continue;
-    const double s = total / k / ranges[i];
-    spread[i] = s;
-    sum += s;
-    sum_sq += s * s;
-    ++n;
+    if (k == 0 || !(depths[i] > 0)) continue;
+    spread[i] = total / k / depths[i];
+    finite.push_back(spread[i]);
   }
-  if (n == 0) {
-    points->clear();
-    colours->clear();
-    return;
-  }
-  const double mean = sum / static_cast<double>(n);
-  const double var = std::max(0.0, sum_sq / static_cast<double>(n) - mean * mean);
-  const double limit = mean + stddev_mult * std::sqrt(var);
+  if (finite.size() < kMinGridOutlierPoints) return 0;
+  double mean = 0, var = 0;
+  for (double s : finite) mean += s;
+  mean /= static_cast<double>(finite.size());
+  for (double s : finite) var += (s - mean) * (s - mean);
+  var /= static_cast<double>(finite.size());
+  // (A frame of equal spreads, within rounding, drops none.)
+  const double limit = mean + std::max(stddev_mult * std::sqrt(var), 1e-6 * mean);
   size_t kept = 0;
   for (size_t i = 0; i < p.size(); ++i) {
     if (!(spread[i] <= limit)) continue;
@@ -303,8 +308,10 @@ void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vecto
     (*colours)[kept] = (*colours)[i];
     ++kept;
   }
+  const size_t dropped = p.size() - kept;
   points->resize(kept);
   colours->resize(kept);
+  return dropped;
 }
 
 }  // namespace ptz::perception

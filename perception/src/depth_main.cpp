@@ -116,6 +116,7 @@ class DepthNode {
     status_.increment("frames_processed");
     status_.setCounter("points_per_cloud", cloud.width * cloud.height);
     status_.increment("points_published", cloud.width * cloud.height);
+    status_.setCounter("outliers_dropped_per_frame", static_cast<int64_t>(depth_.outliers_dropped));
     status_.setCounter("min_disparity_px", depth_.min_disparity_px);
     status_.setCounter("rectification_rebuilds", estimator_.rectifier().rebuilds());
     if (target) status_.increment("frames_following_target");

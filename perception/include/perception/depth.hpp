@@ -128,17 +128,18 @@ struct DepthParams {
 void declareDepthParams(Params& params);
 
 // Drops the grid outliers of outlier_stddev_mult (above) from points and colours. cell: for each
-// node of a grid of `cols` columns (row-major), the index of its point or -1; ranges: each
-// point's distance from the camera.
-void removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& ranges,
-                        double stddev_mult, std::vector<cv::Point3f>* points,
-                        std::vector<cv::Vec3b>* colours);
+// node of a grid of `cols` columns (row-major), the index of its point or -1; depths: each
+// point's depth along the camera's axis. Returns how many it dropped.
+size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& depths,
+                          double stddev_mult, std::vector<cv::Point3f>* points,
+                          std::vector<cv::Vec3b>* colours);
 
 // Valid disparities of one frame as head-frame points with the left image's colour.
 struct DepthFrame {
   std::vector<cv::Point3f> points_head_m;
   std::vector<cv::Vec3b> colours_bgr;
-  cv::Mat disparity_16s;  // rectified left view
+  size_t outliers_dropped = 0;  // by the grid outlier filter
+  cv::Mat disparity_16s;        // rectified left view
   cv::Mat left_rectified_bgr;
   int min_disparity_px = 0;
 };
