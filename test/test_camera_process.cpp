@@ -304,11 +304,7 @@ TEST(CameraProcess, ATriggerChipThatDoesNotExistExitsTwoNamingIt) {
       std::string("timeout 20 ") + PTZ_CAMERA_BIN +
       " --lcm-url memq:// --left-source 0 --right-source 1"
       " --trigger-chip /dev/gpiochip99 --trigger-line 17 2>&1; echo exit=$?";
-  std::string out;
-  FILE* f = popen(command.c_str(), "r");
-  char buf[512];
-  while (f && std::fgets(buf, sizeof buf, f)) out += buf;
-  if (f) pclose(f);
+  const std::string out = ptz::test::runShell(command);
   EXPECT_NE(out.find("parameter 'trigger_chip': cannot open GPIO chip '/dev/gpiochip99'"),
             std::string::npos)
       << out;

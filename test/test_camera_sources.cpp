@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "ptz/config.hpp"
+#include "ptz/measure.hpp"
 #include "ptz_driver/capture_source.hpp"
 #include "ptz_driver/stereo_camera.hpp"
 
@@ -59,13 +60,13 @@ Played play(const SourceSpec& spec, const CaptureOptions& o, size_t max_frames =
   auto notifier = std::make_shared<FrameNotifier>();
   auto source = makeCaptureFactory(spec, o, clock, notifier)();
   Played p;
-  const int64_t deadline = wallClockUtime() + 10'000'000;
-  while (wallClockUtime() < deadline && p.frames.size() < max_frames) {
+  const int64_t deadline = ptz::wallUtime() + 10'000'000;
+  while (ptz::wallUtime() < deadline && p.frames.size() < max_frames) {
     CapturedFrame f;
     const FrameSource::Poll r = source->poll(&f);
     if (r == FrameSource::Poll::kFrame) {
       p.frames.push_back(f);
-      p.taken_utime.push_back(wallClockUtime());
+      p.taken_utime.push_back(ptz::wallUtime());
       continue;
     }
     if (r != FrameSource::Poll::kNothing) {
@@ -217,9 +218,9 @@ TEST(CameraSources, ARecordingWithAGapLongerThanTheSourceTimeoutPlaysThroughWith
   StereoCamera camera(c, {makeCaptureFactory(c.source[0], c.capture[0], clock, notifier),
                           makeCaptureFactory(c.source[1], c.capture[1], clock, notifier)});
   std::vector<StampedPair> pairs;
-  const int64_t deadline = wallClockUtime() + 15'000'000;
-  while (!camera.finished() && wallClockUtime() < deadline) {
-    for (auto& p : camera.step(wallClockUtime())) pairs.push_back(std::move(p));
+  const int64_t deadline = ptz::wallUtime() + 15'000'000;
+  while (!camera.finished() && ptz::wallUtime() < deadline) {
+    for (auto& p : camera.step(ptz::wallUtime())) pairs.push_back(std::move(p));
     pollfd fd{notifier->fd(), POLLIN, 0};
     ::poll(&fd, 1, 50);
     notifier->drain();
@@ -254,13 +255,13 @@ TEST(CameraSources, AVideoWithoutTimestampsIsTimedByItsFrameRate) {
 TEST(CameraSources, AGstreamerPipelineIsStampedAtGrabMinusTheLatency) {
   CaptureOptions o;
   o.latency_s = 0.25;
-  const int64_t before = wallClockUtime();
+  const int64_t before = ptz::wallUtime();
   const Played p = play(
       parseSource("videotestsrc num-buffers=3 ! video/x-raw,width=32,height=24 ! videoconvert ! "
                   "appsink",
                   "x"),
       o);
-  const int64_t after = wallClockUtime();
+  const int64_t after = ptz::wallUtime();
   ASSERT_EQ(p.frames.size(), 3u);
   for (const auto& f : p.frames) {
     EXPECT_GE(f.capture_utime, before - 250'000);

@@ -119,6 +119,10 @@ TEST(Horopter, CentredOnTheTargetElseEndsAtTheFarDepth) {
   const int far = perception::chooseMinDisparity(r, p, 64, std::nullopt);
   EXPECT_LE(far, r.disparityAtDepth(p.far_depth_m));
   EXPECT_GT(far + 1, r.disparityAtDepth(p.far_depth_m));
+  // Depth and disparity are each other's inverse (verged: the disparity may be negative).
+  for (double depth_m : {0.5, 3.0, 40.0}) {
+    EXPECT_NEAR(r.depthAtDisparity(r.disparityAtDepth(depth_m)), depth_m, 1e-9 * depth_m);
+  }
   p.follow_target = false;
   EXPECT_EQ(perception::chooseMinDisparity(r, p, 64, target), far);
   p.far_depth_m = 0;

@@ -10,6 +10,7 @@
 #include "ptz/plant.hpp"
 #include "ptz_driver/gpio_factory.hpp"
 #include "ptz_driver/head_factory.hpp"
+#include "support/child_process.hpp"
 #include "support/gpio_rig.hpp"
 
 using ptz::ConfigError;
@@ -31,15 +32,6 @@ std::string errorOf(const ptz::Params& p) {
     return e.what();
   }
   return "(no error)";
-}
-
-std::string run(const std::string& command) {
-  std::string out;
-  FILE* f = popen(command.c_str(), "r");
-  char buf[512];
-  while (f && std::fgets(buf, sizeof buf, f)) out += buf;
-  if (f) pclose(f);
-  return out;
 }
 
 }  // namespace
@@ -82,13 +74,15 @@ TEST(GpioBackend, ParametersAreCheckedWithErrorsNamingThem) {
 
 TEST(GpioBackend, DriverExitsTwoNamingAChipThatDoesNotExist) {
   const std::string driver = std::string("timeout 20 ") + PTZ_DRIVER_BIN;
-  std::string out = run(driver + " --backend gpio --gpio-chip /dev/gpiochip99 --lcm-url memq:// " +
-                        "2>&1; echo exit=$?");
+  std::string out = ptz::test::runShell(
+      driver + " --backend gpio --gpio-chip /dev/gpiochip99 --lcm-url memq:// " +
+      "2>&1; echo exit=$?");
   EXPECT_NE(out.find("'/dev/gpiochip99'"), std::string::npos) << out;
   EXPECT_NE(out.find("exit=2"), std::string::npos) << out;
   // The example configuration parses, and says the same about the chip.
-  out = run(driver + " --config " PTZ_SOURCE_DIR "/config/driver_gpio.yaml --gpio-chip gpiochip9" +
-            " --lcm-url memq:// 2>&1; echo exit=$?");
+  out = ptz::test::runShell(
+      driver + " --config " PTZ_SOURCE_DIR "/config/driver_gpio.yaml --gpio-chip gpiochip9" +
+      " --lcm-url memq:// 2>&1; echo exit=$?");
   EXPECT_NE(out.find("cannot open GPIO chip 'gpiochip9'"), std::string::npos) << out;
   EXPECT_NE(out.find("exit=2"), std::string::npos) << out;
 }

@@ -65,11 +65,6 @@ std::string channel(const Params& params, const std::string& base) {
   return params.getString("channel_prefix") + base;
 }
 
-int64_t wallUtime() {
-  using namespace std::chrono;
-  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
-}
-
 ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality) {
   CV_Assert(image.depth() == CV_8U && (image.channels() == 1 || image.channels() == 3));
   ptzstereo::image_t msg{};
@@ -276,6 +271,13 @@ void StatusReporter::increment(const std::string& name, int64_t by) {
 void StatusReporter::setCounter(const std::string& name, int64_t value) {
   counters_[name] = value;
 }
+void StatusReporter::setPercentilesUs(const std::string& name, std::vector<double>* samples_ms,
+                                      size_t min_samples) {
+  if (samples_ms->size() < min_samples) return;
+  counters_[name + "_us_p50"] = std::llround(percentile(*samples_ms, 50) * 1000);
+  counters_[name + "_us_p99"] = std::llround(percentile(*samples_ms, 99) * 1000);
+  samples_ms->clear();
+}
 int64_t StatusReporter::counter(const std::string& name) const {
   auto it = counters_.find(name);
   return it == counters_.end() ? 0 : it->second;
@@ -348,17 +350,6 @@ void RateLimitedLog::warn(const std::string& key, const std::string& message) {
     std::fprintf(stderr, "warning: %s\n", message.c_str());
   }
   last_[key] = {now, 0};
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const double rank = std::clamp(p, 0.0, 100.0) / 100.0 * (v.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(rank));
-  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(lo), v.end());
-  const double a = v[lo];
-  if (lo + 1 >= v.size()) return a;
-  const double b = *std::min_element(v.begin() + static_cast<ptrdiff_t>(lo) + 1, v.end());
-  return a + (rank - lo) * (b - a);
 }
 
 }  // namespace ptz

@@ -106,6 +106,10 @@ double Rectification::disparityAtDepth(double depth_m) const {
   return P1.at<double>(0, 2) - P2.at<double>(0, 2) - P2.at<double>(0, 3) / depth_m;
 }
 
+double Rectification::depthAtDisparity(double disparity_px) const {
+  return -P2.at<double>(0, 3) / (disparity_px - (P1.at<double>(0, 2) - P2.at<double>(0, 2)));
+}
+
 namespace {
 
 bool calibrated(const CameraSpec& spec, const PtzPose& pose) {
@@ -227,12 +231,11 @@ bool DepthEstimator::process(const cv::Mat& left_bgr, const cv::Mat& right_bgr,
   out->points_head_m.clear();
   if (!xyd.empty()) cv::perspectiveTransform(xyd, out->points_head_m, M);
   if (params_.outlier_stddev_mult > 0) {
-    // Depth along the rectified axis (from Q and the disparity): the grid's spacing on a
-    // surface facing the camera grows with it.
-    const double q23 = r.Q.at<double>(2, 3), q32 = r.Q.at<double>(3, 2), q33 = r.Q.at<double>(3, 3);
+    // Depth along the rectified axis: the grid's spacing on a surface facing the camera grows
+    // with it.
     std::vector<float> depths(xyd.size());
     for (size_t i = 0; i < xyd.size(); ++i) {
-      depths[i] = static_cast<float>(std::abs(q23 / (q32 * xyd[i].z + q33)));
+      depths[i] = static_cast<float>(r.depthAtDisparity(xyd[i].z));
     }
     out->outliers_dropped =
         removeGridOutliers(cell_, grid_cols, depths, params_.outlier_stddev_mult,
@@ -277,10 +280,10 @@ size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vec
     }
   }
   // Each point's mean of those over its depth, as PCL's SOR takes its k nearest; none: isolated
-  // (dropped).
+  // (infinite: dropped).
   std::vector<double> spread(p.size(), std::numeric_limits<double>::infinity());
-  std::vector<double> finite;
-  finite.reserve(p.size());
+  double sum = 0;
+  size_t n = 0;
   for (size_t i = 0; i < p.size(); ++i) {
     double total = 0;
     int k = 0;
@@ -291,14 +294,16 @@ size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vec
     }
     if (k == 0 || !(depths[i] > 0)) continue;
     spread[i] = total / k / depths[i];
-    finite.push_back(spread[i]);
+    sum += spread[i];
+    ++n;
   }
-  if (finite.size() < kMinGridOutlierPoints) return 0;
-  double mean = 0, var = 0;
-  for (double s : finite) mean += s;
-  mean /= static_cast<double>(finite.size());
-  for (double s : finite) var += (s - mean) * (s - mean);
-  var /= static_cast<double>(finite.size());
+  if (n < kMinGridOutlierPoints) return 0;
+  const double mean = sum / static_cast<double>(n);
+  double var = 0;
+  for (double s : spread) {
+    if (std::isfinite(s)) var += (s - mean) * (s - mean);
+  }
+  var /= static_cast<double>(n);
   // (A frame of equal spreads, within rounding, drops none.)
   const double limit = mean + std::max(stddev_mult * std::sqrt(var), 1e-6 * mean);
   size_t kept = 0;

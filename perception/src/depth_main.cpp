@@ -121,13 +121,7 @@ class DepthNode {
     status_.setCounter("rectification_rebuilds", estimator_.rectifier().rebuilds());
     if (target) status_.increment("frames_following_target");
     maybeWritePcd(cloud);
-    if (processing_ms_.size() >= 10) {
-      status_.setCounter("processing_us_p50",
-                         static_cast<int64_t>(percentile(processing_ms_, 50) * 1000));
-      status_.setCounter("processing_us_p99",
-                         static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
-      processing_ms_.clear();
-    }
+    status_.setPercentilesUs("processing", &processing_ms_, 10);
   }
 
   void publishDisparity(const ptzstereo::stereo_frame_t& m) {

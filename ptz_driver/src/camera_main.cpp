@@ -136,24 +136,13 @@ class CameraNode {
       status_.setCounter("trigger_missed_periods", pulser_->missedPeriods());
       status_.setCounter("trigger_io_errors", trigger_chip_->ioErrors());
       for (double late_s : pulser_->takeEdgeLatenessS()) edge_late_ms_.push_back(late_s * 1e3);
-      if (edge_late_ms_.size() >= 30) {  // how late the edges came after their periods' starts
-        status_.setCounter("trigger_late_us_p50",
-                           std::llround(percentile(edge_late_ms_, 50) * 1e3));
-        status_.setCounter("trigger_late_us_p99",
-                           std::llround(percentile(edge_late_ms_, 99) * 1e3));
-        edge_late_ms_.clear();
-      }
+      // How late the edges came after their periods' starts.
+      status_.setPercentilesUs("trigger_late", &edge_late_ms_, 30);
     }
-    if (wait_ms_.size() >= 30) {  // from the first frame of a pair arriving to its publication
-      status_.setCounter("pair_wait_us_p50", std::llround(percentile(wait_ms_, 50) * 1000));
-      status_.setCounter("pair_wait_us_p99", std::llround(percentile(wait_ms_, 99) * 1000));
-      wait_ms_.clear();
-    }
-    if (ptz_wait_ms_.size() >= 30) {  // of that, held for a PTZ_STATE after the capture
-      status_.setCounter("ptz_wait_us_p50", std::llround(percentile(ptz_wait_ms_, 50) * 1000));
-      status_.setCounter("ptz_wait_us_p99", std::llround(percentile(ptz_wait_ms_, 99) * 1000));
-      ptz_wait_ms_.clear();
-    }
+    // From the first frame of a pair arriving to its publication, and of that how long it was
+    // held for a PTZ_STATE after the capture.
+    status_.setPercentilesUs("pair_wait", &wait_ms_, 30);
+    status_.setPercentilesUs("ptz_wait", &ptz_wait_ms_, 30);
     std::string message;
     Health h = camera_->health(now, &message);
     if (pulser_) addTriggerHealth(now, &h, &message);

@@ -1,5 +1,7 @@
 #include "ptz_driver/capture_source.hpp"
 
+#include "ptz/measure.hpp"
+
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
@@ -46,7 +48,7 @@ class Reader {
     if (!spec_.live()) {
       const auto first =
           o_.timestamps.empty() ? std::nullopt : std::optional<int64_t>(o_.timestamps.front());
-      base_utime_ = clock_->start(first, wallClockUtime());
+      base_utime_ = clock_->start(first, wallUtime());
     }
     while (!stopped()) {
       CapturedFrame f;
@@ -69,7 +71,7 @@ class Reader {
  private:
   // The V4L2 buffer's time where the driver gives one, else the grab's.
   void stampLive(CapturedFrame* f) {
-    const int64_t wall_utime = wallClockUtime();
+    const int64_t wall_utime = wallUtime();
     int64_t t = wall_utime;
     if (spec_.kind == SourceKind::kV4l2) {
       timespec mono{};

@@ -56,11 +56,6 @@ std::optional<int64_t> bufferTimeToWallUtime(double buffer_ms, double mono_now_m
   return wall_now_utime - std::llround(age_ms * 1e3);
 }
 
-int64_t wallClockUtime() {
-  using namespace std::chrono;
-  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
-}
-
 bool normaliseImage(cv::Mat* image, int width, int height) {
   if (image->depth() != CV_8U) {
     const double scale = image->depth() == CV_16U ? 1.0 / 256 : 1.0;

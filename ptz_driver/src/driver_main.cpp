@@ -194,11 +194,7 @@ class DriverNode {
     }
     rtt_ms_.insert(rtt_ms_.end(), rtt.begin(), rtt.end());
     for (auto& h : heads_) h->stats().round_trip_ms.clear();
-    if (rtt_ms_.size() >= 50) {
-      status_.setCounter("head_round_trip_us_p50", std::llround(percentile(rtt_ms_, 50) * 1000));
-      status_.setCounter("head_round_trip_us_p99", std::llround(percentile(rtt_ms_, 99) * 1000));
-      rtt_ms_.clear();
-    }
+    status_.setPercentilesUs("head_round_trip", &rtt_ms_, 50);
     status_.setCounter("head_timeouts", timeouts);
     status_.setCounter("head_errors", errors);
     status_.setCounter("head_buffer_full", buffer_full);

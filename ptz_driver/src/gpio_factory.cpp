@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 
+#include "ptz/measure.hpp"
 #include "ptz/plant.hpp"
 #include "ptz_driver/gpio_fake.hpp"
 
@@ -24,17 +25,11 @@ const char* const kLineNames[7] = {"dir_line",       "dir2_line",      "enable_l
                                    "encoder_a_line", "encoder_b_line", "limit_min_line",
                                    "limit_max_line"};
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-
 double checked(const Params& p, const std::string& name, double lo, double hi, bool lo_open) {
   const double v = p.getDouble(name);
   if (!std::isfinite(v) || v < lo || (lo_open && v == lo) || v > hi) {
-    throw ConfigError("parameter '" + name + "' is " + num(v) + ": it must be " +
-                      (lo_open ? "> " : ">= ") + num(lo) + " and <= " + num(hi));
+    throw ConfigError("parameter '" + name + "' is " + formatNumber(v) + ": it must be " +
+                      (lo_open ? "> " : ">= ") + formatNumber(lo) + " and <= " + formatNumber(hi));
   }
   return v;
 }
@@ -127,10 +122,10 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
       if (margin_rad[end] >= coast_rad && margin_rad[end] > 0) continue;  // false for NaN
       const std::string sw = a + (end == 0 ? "_min_switch_rad" : "_max_switch_rad");
       const std::string soft = a + (end == 0 ? "_min" : "_max");
-      throw ConfigError("parameter '" + sw + "' is " + num(p.getDouble(sw)) +
-                        ": it must lie at least 'coast_rad' (" + num(coast_rad) + ") " +
+      throw ConfigError("parameter '" + sw + "' is " + formatNumber(p.getDouble(sw)) +
+                        ": it must lie at least 'coast_rad' (" + formatNumber(coast_rad) + ") " +
                         (end == 0 ? "below" : "above") + " the soft limit '" + soft + "' (" +
-                        num(end == 0 ? c.soft_min_rad : c.soft_max_rad) +
+                        formatNumber(end == 0 ? c.soft_min_rad : c.soft_max_rad) +
                         "), so that an axis stopped there coasts to rest before the switch");
     }
     c.pwm_hz = checked(p, "pwm_hz", 0, 20000, true);

@@ -14,14 +14,6 @@ double wallS() {
   return duration_cast<nanoseconds>(system_clock::now().time_since_epoch()).count() * 1e-9;
 }
 
-void sleepUntil(double clock_s) {
-  timespec t{};
-  t.tv_sec = static_cast<time_t>(std::floor(clock_s));
-  t.tv_nsec = static_cast<long>((clock_s - std::floor(clock_s)) * 1e9);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
-  }
-}
-
 constexpr size_t kMaxLatenessSamples = 100000;
 
 }  // namespace
@@ -147,7 +139,7 @@ void GpioHead::run() {
     }
     stepped_.notify_all();
     due_s = next_s;
-    sleepUntil(due_s - lead_s);
+    gpioSleepUntilS(due_s - lead_s);
   }
 }
 

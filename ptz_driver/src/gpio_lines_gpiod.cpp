@@ -155,6 +155,14 @@ double gpioClockS() {
   return clockS(CLOCK_MONOTONIC);
 }
 
+void gpioSleepUntilS(double t_s) {
+  timespec t{};
+  t.tv_sec = static_cast<time_t>(std::floor(t_s));
+  t.tv_nsec = static_cast<long>((t_s - std::floor(t_s)) * 1e9);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
+  }
+}
+
 std::unique_ptr<GpioLines> openGpiodChip(const std::string& chip, const std::string& consumer,
                                          const std::string& param) {
   return std::make_unique<GpiodLines>(chip, consumer, param);

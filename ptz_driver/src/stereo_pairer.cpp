@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "ptz/measure.hpp"
+
 namespace ptz::driver {
 namespace {
 
@@ -100,9 +102,7 @@ void StereoPairer::pushOffset(int64_t right_minus_left_us) {
 
 std::optional<double> StereoPairer::typicalOffsetS() const {
   if (offsets_us_.empty()) return std::nullopt;
-  std::vector<int64_t> v(offsets_us_.begin(), offsets_us_.end());
-  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(v.size() / 2), v.end());
-  return static_cast<double>(v[v.size() / 2]) * 1e-6;
+  return percentile({offsets_us_.begin(), offsets_us_.end()}, 50) * 1e-6;
 }
 
 std::string StereoPairer::noPairMessage(int64_t now_utime) const {

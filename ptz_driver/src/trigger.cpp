@@ -1,31 +1,16 @@
 #include "ptz_driver/trigger.hpp"
 
-#include <time.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "ptz_driver/capture_source.hpp"  // wallClockUtime
+#include "ptz/measure.hpp"
 
 namespace ptz::driver {
 namespace {
 
 const std::array<const char*, 2> kSide = {"left", "right"};
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return NAN;
-  std::nth_element(v.begin(), v.begin() + static_cast<ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 std::string ms(double us) {
   char buf[32];
@@ -69,17 +54,18 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
                       t.chip + "', got " + std::to_string(t.line));
   }
   if (!std::isfinite(t.rate_hz) || t.rate_hz < 1 || t.rate_hz > 1000) {
-    throw ConfigError("parameter 'trigger_rate_hz' must be 1..1000, got " + num(t.rate_hz));
+    throw ConfigError("parameter 'trigger_rate_hz' must be 1..1000, got " +
+                      formatNumber(t.rate_hz));
   }
   const double period_s = 1 / t.rate_hz;
   // At most half: a pulse whose edge came up to half a period late still ends before the next.
   if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s > period_s / 2) {
     throw ConfigError("parameter 'trigger_pulse_s' must be > 0 and at most half the period (" +
-                      num(period_s / 2) + " s), got " + num(t.pulse_s));
+                      formatNumber(period_s / 2) + " s), got " + formatNumber(t.pulse_s));
   }
   if (!std::isfinite(t.window_s) || t.window_s < 0 || t.window_s >= period_s / 2) {
     throw ConfigError("parameter 'trigger_window_s' must be >= 0 and below half the period (" +
-                      num(period_s / 2) + " s), got " + num(t.window_s));
+                      formatNumber(period_s / 2) + " s), got " + formatNumber(t.window_s));
   }
   for (size_t s = 0; s < 2; ++s) {
     if (!live[s]) {
@@ -125,14 +111,8 @@ int64_t TriggerLog::clockSteps() const {
 PulseClock realPulseClock() {
   PulseClock c;
   c.now_s = gpioClockS;
-  c.sleep_until_s = [](double t_s) {
-    timespec ts{};
-    ts.tv_sec = static_cast<time_t>(std::floor(t_s));
-    ts.tv_nsec = static_cast<long>((t_s - std::floor(t_s)) * 1e9);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    }
-  };
-  c.wall_utime = wallClockUtime;
+  c.sleep_until_s = gpioSleepUntilS;
+  c.wall_utime = wallUtime;
   return c;
 }
 
@@ -281,7 +261,7 @@ std::string TriggerMatcher::problem(int64_t now_utime, bool* error) const {
     if (count[Verdict::kFar] > 0) {
       why.push_back(std::to_string(count[Verdict::kFar]) + " none within " +
                     ms(static_cast<double>(window_us_)) + ", median distance " +
-                    ms(median(far_us)));
+                    ms(percentile(far_us, 50)));
     }
     if (count[Verdict::kRepeat] > 0) {
       why.push_back(std::to_string(count[Verdict::kRepeat]) + " a second frame for one pulse");
@@ -316,7 +296,7 @@ void TriggerMatcher::addCounters(std::map<std::string, int64_t>* counters) const
     }
     // How far after its pulse a frame's capture time falls: what to add to its latency.
     if (!offsets_us.empty()) {
-      (*counters)["trigger_offset_us_p50_" + side] = std::llround(median(offsets_us));
+      (*counters)["trigger_offset_us_p50_" + side] = std::llround(percentile(offsets_us, 50));
     }
   }
   (*counters)["trigger_clock_steps"] = log_.clockSteps();

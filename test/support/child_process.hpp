@@ -1,4 +1,5 @@
-// Starts a program as a child process for multi-process tests; stops it on destruction.
+// Starts a program as a child process for multi-process tests; stops it on destruction. Or runs
+// a shell command to its end and returns what it printed.
 #pragma once
 
 #include <signal.h>
@@ -7,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <future>
 #include <string>
 #include <vector>
@@ -63,5 +65,15 @@ class ChildProcess {
   int code_ = -1;
   std::future<int> exit_code_;
 };
+
+// What `command` (through sh) printed on stdout, once it has ended.
+inline std::string runShell(const std::string& command) {
+  std::string out;
+  FILE* f = popen(command.c_str(), "r");
+  char buf[512];
+  while (f && std::fgets(buf, sizeof buf, f)) out += buf;
+  if (f) pclose(f);
+  return out;
+}
 
 }  // namespace ptz::test

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ptz/config.hpp"
+#include "ptz/measure.hpp"  // wallUtime, percentile (re-exported)
 #include "ptz/rig.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
@@ -45,8 +46,6 @@ constexpr const char* kPointCloud = "POINT_CLOUD";
 constexpr const char* kDisparityImage = "DISPARITY_IMAGE";
 constexpr const char* kProcessStatusPrefix = "PROCESS_STATUS_";
 }  // namespace channels
-
-int64_t wallUtime();
 
 // Encodes an 8-bit BGR or gray image. jpeg_quality is used for ENCODING_JPEG only.
 ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_quality);
@@ -92,6 +91,10 @@ class StatusReporter {
   void countDropped(const std::string& channel, const std::string& reason);
   void increment(const std::string& counter, int64_t by = 1);
   void setCounter(const std::string& counter, int64_t value);
+  // Once samples_ms holds at least min_samples: counters NAME_us_p50 and NAME_us_p99 (in
+  // microseconds), and the samples start over.
+  void setPercentilesUs(const std::string& name, std::vector<double>* samples_ms,
+                        size_t min_samples);
   int64_t counter(const std::string& name) const;
   void setState(int8_t state, const std::string& message);
   // Publishes when a period has passed; returns true when it did.
@@ -173,8 +176,5 @@ class RateLimitedLog {
   double period_s_;
   std::map<std::string, std::pair<int64_t, int64_t>> last_;  // key -> (utime, suppressed)
 };
-
-// Percentile of a sample set (p in [0, 100]); NaN when empty.
-double percentile(std::vector<double> values, double p);
 
 }  // namespace ptz

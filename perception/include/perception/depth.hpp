@@ -79,6 +79,8 @@ struct Rectification {
   double disparityOf(const Eigen::Vector3d& p_head) const;
   // Disparity (px) of a point at depth_m straight ahead of the rectified left camera.
   double disparityAtDepth(double depth_m) const;
+  // Its inverse: the depth (m) along the rectified axis of a disparity (px).
+  double depthAtDisparity(double disparity_px) const;
 };
 
 // Builds rectification maps for the pose of a frame; rebuilds only when the pose changes.

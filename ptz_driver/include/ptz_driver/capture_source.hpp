@@ -67,9 +67,6 @@ SourceFactory makeCaptureFactory(const SourceSpec& spec, const CaptureOptions& o
 // Reader threads given up while blocked in a driver that have not finished yet.
 int abandonedReaders();
 
-// Wall clock, microseconds since the Unix epoch.
-int64_t wallClockUtime();
-
 // A V4L2 buffer's time (CLOCK_MONOTONIC in ms, as OpenCV's CAP_PROP_POS_MSEC gives it after a
 // grab, wrapped modulo 2^32 ms where time_t has 32 bits) on the wall clock, when plausible: not
 // after mono_now_ms and at most max_age_ms before.

@@ -19,6 +19,8 @@ struct LineEvent {
 // The clock of line events and of the heads' control threads: CLOCK_MONOTONIC in seconds (the
 // wall clock may jump, and a PWM period must not stretch with it).
 double gpioClockS();
+// Sleeps until t_s on that clock (to the deadline, not for a while: periods do not drift).
+void gpioSleepUntilS(double t_s);
 
 enum class Bias { kAsIs, kPullUp, kDisabled };
 
