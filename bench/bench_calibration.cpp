@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "perception/calibration.hpp"
-#include "perception/calibration_files.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/calibrate/calibration.hpp"
+#include "perception/calibrate/calibration_files.hpp"
 
 namespace {
 

@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "perception/cloud.hpp"
-#include "perception/depth.hpp"
-#include "ptz/config.hpp"
-#include "ptz/transport.hpp"
+#include "common/config.hpp"
+#include "common/transport.hpp"
+#include "perception/depth/cloud.hpp"
+#include "perception/depth/depth.hpp"
 #include "sim/simulator.hpp"
 
 using ptz::bench::Clock;

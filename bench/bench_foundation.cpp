@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/simulator.hpp"
 #include "support/child_process.hpp"

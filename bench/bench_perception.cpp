@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "perception/detector.hpp"
-#include "perception/stereo.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/detect/detector.hpp"
+#include "perception/detect/stereo.hpp"
 #include "sim/simulator.hpp"
 
 using ptz::bench::Clock;

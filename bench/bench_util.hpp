@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 
 namespace ptz::bench {
 

@@ -1,4 +1,4 @@
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -144,6 +144,7 @@ void Params::add(const std::string& name, const char* v, const std::string& help
   entries_[name] = {Type::kString, v, v, "", help};
 }
 void Params::addSection(const std::string& name, const std::string& help) {
+  if (!sections_.count(name)) section_order_.push_back(name);
   sections_[name] = help;
 }
 
@@ -292,8 +293,8 @@ std::string Params::usage() const {
     if (!e.default_value.empty()) s << " (default " << e.default_value << ")";
     s << "\n";
   }
-  for (const auto& [name, help] : sections_) {
-    s << "  " << std::left << std::setw(35) << (name + ":") << " " << help
+  for (const auto& name : section_order_) {
+    s << "  " << std::left << std::setw(35) << (name + ":") << " " << sections_.at(name)
       << " (config file only)\n";
   }
   return s.str();
@@ -302,9 +303,19 @@ std::string Params::usage() const {
 std::string Params::markdownTable() const {
   std::ostringstream s;
   s << "| parameter | unit | default | meaning |\n|---|---|---|---|\n";
+  // A '|' inside a cell would end it.
+  auto cell = [](const std::string& text) {
+    std::string out;
+    for (char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out;
+  };
   for (const auto& name : order_) {
     const Entry& e = entries_.at(name);
-    s << "| `" << name << "` | " << e.unit << " | " << e.default_value << " | " << e.help << " |\n";
+    s << "| `" << name << "` | " << e.unit << " | " << cell(e.default_value) << " | "
+      << cell(e.help) << " |\n";
+  }
+  for (const auto& name : section_order_) {
+    s << "| `" << name << ":` (section) |  |  | " << cell(sections_.at(name)) << " |\n";
   }
   return s.str();
 }

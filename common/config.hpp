@@ -88,6 +88,7 @@ class Params {
   std::vector<std::string> order_;
   std::map<std::string, Entry> entries_;
   std::map<std::string, std::string> sections_;
+  std::vector<std::string> section_order_;  // as declared, for the tables
   std::string config_path_;
   cv::FileStorage config_;
 };

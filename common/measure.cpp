@@ -1,4 +1,4 @@
-#include "ptz/measure.hpp"
+#include "common/measure.hpp"
 
 #include <algorithm>
 #include <chrono>

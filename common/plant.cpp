@@ -1,4 +1,4 @@
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -113,32 +113,61 @@ PtzPlant::Params defaultPlantParams() {
 
 }  // namespace ptz
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz {
 namespace {
 const char* const kAxisNames[3] = {"pan", "tilt", "zoom"};
 const char* const kAxisUnits[3] = {"rad", "rad", "ratio"};
-}  // namespace
 
-void addPlantParams(Params& params) {
+// Per axis the motor model (when asked for) and then the limits, so --help reads axis by axis.
+void addAxisParams(Params& params, bool with_model) {
   const PtzPlant::Params d = defaultPlantParams();
-  params.add("dead_time_s", 0.0, "s", "dead time tau of every axis (image processing delay)");
-  params.add("plant_step_s", d.step_s, "s", "integration step of the motor model");
   for (int i = 0; i < 3; ++i) {
     const std::string a = kAxisNames[i];
     const std::string u = kAxisUnits[i];
-    params.add(a + "_gain", d.axis[i].gain, "", a + " motor gain K");
-    params.add(a + "_time_constant_s", d.axis[i].time_constant_s, "s",
-               a + " motor time constant T");
+    if (with_model) {
+      params.add(a + "_gain", d.axis[i].gain, "", a + " motor gain K");
+      params.add(a + "_time_constant_s", d.axis[i].time_constant_s, "s",
+                 a + " motor time constant T");
+    }
     params.add(a + "_min", d.axis[i].min_position, u, a + " lower limit");
     params.add(a + "_max", d.axis[i].max_position, u, a + " upper limit");
     params.add(a + "_max_rate", d.axis[i].max_rate_per_s, u + "/s", a + " rate limit");
   }
 }
 
+}  // namespace
+
+void addAxisLimitParams(Params& params) {
+  addAxisParams(params, false);
+}
+
+void addPlantParams(Params& params) {
+  params.add("dead_time_s", 0.0, "s", "dead time tau of every axis (image processing delay)");
+  params.add("plant_step_s", defaultPlantParams().step_s, "s",
+             "integration step of the motor model");
+  addAxisParams(params, true);
+}
+
+PtzPlant::Params axisLimitsFrom(const Params& params) {
+  PtzPlant::Params p = defaultPlantParams();
+  for (int i = 0; i < 3; ++i) {
+    const std::string a = kAxisNames[i];
+    AxisParams& ax = p.axis[i];
+    ax.min_position = params.getDouble(a + "_min");
+    ax.max_position = params.getDouble(a + "_max");
+    ax.max_rate_per_s = params.getDouble(a + "_max_rate");
+    if (!(ax.min_position < ax.max_position) || !(ax.max_rate_per_s > 0)) {
+      throw ConfigError("limits of the " + a + " axis: need " + a + "_min < " + a + "_max, " + a +
+                        "_max_rate > 0");
+    }
+  }
+  return p;
+}
+
 PtzPlant::Params plantParamsFrom(const Params& params) {
-  PtzPlant::Params p;
+  PtzPlant::Params p = axisLimitsFrom(params);
   p.step_s = params.getDouble("plant_step_s");
   if (!(p.step_s > 0)) throw ConfigError("parameter 'plant_step_s' must be > 0");
   for (int i = 0; i < 3; ++i) {
@@ -147,11 +176,7 @@ PtzPlant::Params plantParamsFrom(const Params& params) {
     ax.gain = params.getDouble(a + "_gain");
     ax.time_constant_s = params.getDouble(a + "_time_constant_s");
     ax.dead_time_s = params.getDouble("dead_time_s");
-    ax.min_position = params.getDouble(a + "_min");
-    ax.max_position = params.getDouble(a + "_max");
-    ax.max_rate_per_s = params.getDouble(a + "_max_rate");
-    if (!(ax.time_constant_s > 0) || !(ax.min_position < ax.max_position) ||
-        !(ax.max_rate_per_s > 0) || ax.dead_time_s < 0) {
+    if (!(ax.time_constant_s > 0) || ax.dead_time_s < 0) {
       throw ConfigError("plant parameters of the " + a +
                         " axis: need time_constant_s > 0, min < max, max_rate > 0, "
                         "dead_time_s >= 0");

@@ -6,7 +6,7 @@
 #include <deque>
 #include <string>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 
 namespace ptz {
 
@@ -87,8 +87,13 @@ PtzPlant::Params defaultPlantParams();
 
 namespace ptz {
 class Params;
-// Declares the plant's parameters (<axis>_gain, _time_constant_s, _min, _max, _max_rate for
-// pan, tilt and zoom, and the dead time tau of every axis), defaults from defaultPlantParams().
+// The axis limits alone (<axis>_min, _max, _max_rate for pan, tilt and zoom): what a driver of
+// real heads clamps to. Defaults from defaultPlantParams().
+void addAxisLimitParams(Params& params);
+// The limits and the motor model (<axis>_gain, _time_constant_s, the dead time tau of every
+// axis, the integration step): the simulator's plant, a controller's model of it.
 void addPlantParams(Params& params);
+// The limits; the motor model as in defaultPlantParams().
+PtzPlant::Params axisLimitsFrom(const Params& params);
 PtzPlant::Params plantParamsFrom(const Params& params);
 }  // namespace ptz

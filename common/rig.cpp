@@ -1,4 +1,4 @@
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 
 #include <Eigen/Core>
 #include <opencv2/core/eigen.hpp>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <limits>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz {
 

@@ -1,4 +1,4 @@
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz/measure.hpp"  // wallUtime, percentile (re-exported)
-#include "ptz/rig.hpp"
+#include "common/config.hpp"
+#include "common/measure.hpp"  // wallUtime, percentile (re-exported)
+#include "common/rig.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"

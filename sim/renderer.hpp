@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 #include "sim/scene.hpp"
 
 namespace ptz::sim {

@@ -12,11 +12,11 @@
 #include <mutex>
 #include <thread>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
+#include "sim/sim_messages.hpp"
 #include "sim/simulator.hpp"
-#include "sim_messages.hpp"
-#include "visca_server.hpp"
+#include "sim/visca_server.hpp"
 
 namespace ptz::sim {
 namespace {
@@ -42,10 +42,13 @@ void declare(Params& p) {
         "realtime: serve the heads as VISCA-over-IP cameras on 127.0.0.1 at this UDP port "
         "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)");
   p.add("visca_model", "", "VISCA camera model file the heads pretend to be (visca_port)");
-  p.addSection("scene", "backdrop_distance_m, floor_height_m, texture_m_per_texel, texture_seed");
+  p.addSection("scene",
+               "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
+               "texture_seed (7)");
   p.addSection("objects",
-               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, "
-               "color_bgr, trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
+               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, color_bgr, "
+               "textured (0; 1: the colour modulated by the surface texture, for dense stereo), "
+               "trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
   p.addSection("chessboard", "{inner_cols, inner_rows, square_m, centre_m, rotation_vector}");
 }
 

@@ -1,6 +1,6 @@
-#include "sim_messages.hpp"
+#include "sim/sim_messages.hpp"
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 
 namespace ptz::sim {
 namespace {

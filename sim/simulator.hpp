@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <memory>
 
-#include "ptz/plant.hpp"
-#include "ptz/rig.hpp"
+#include "common/plant.hpp"
+#include "common/rig.hpp"
 #include "sim/renderer.hpp"
 #include "sim/scene.hpp"
 

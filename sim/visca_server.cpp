@@ -1,4 +1,4 @@
-#include "visca_server.hpp"
+#include "sim/visca_server.hpp"
 
 namespace ptz::sim {
 

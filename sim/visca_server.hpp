@@ -8,9 +8,9 @@
 #include <memory>
 #include <string>
 
-#include "ptz/rig.hpp"
-#include "ptz_driver/udp.hpp"
-#include "ptz_driver/visca_camera.hpp"
+#include "common/rig.hpp"
+#include "ptz_driver/emulators/visca_camera_emulator.hpp"
+#include "ptz_driver/io/udp.hpp"
 
 namespace ptz::sim {
 

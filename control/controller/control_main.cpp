@@ -5,9 +5,9 @@
 #include <memory>
 #include <optional>
 
-#include "control/controller.hpp"
-#include "control/delay_monitor.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "control/controller/controller.hpp"
+#include "control/controller/delay_monitor.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

@@ -1,9 +1,9 @@
-#include "control/controller.hpp"
+#include "control/controller/controller.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "control/pointing.hpp"
+#include "control/controller/pointing.hpp"
 
 namespace ptz::control {
 namespace {

@@ -32,10 +32,10 @@
 #include <optional>
 #include <string>
 
-#include "control/kalman.hpp"
-#include "control/smith.hpp"
-#include "ptz/plant.hpp"
-#include "ptz/rig.hpp"
+#include "common/plant.hpp"
+#include "common/rig.hpp"
+#include "control/controller/kalman.hpp"
+#include "control/controller/smith.hpp"
 
 namespace ptz::control {
 

@@ -1,4 +1,4 @@
-#include "control/delay_monitor.hpp"
+#include "control/controller/delay_monitor.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "control/stability.hpp"
+#include "control/stability/stability.hpp"
 
 namespace ptz::control {
 

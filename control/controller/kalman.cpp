@@ -1,4 +1,4 @@
-#include "control/kalman.hpp"
+#include "control/controller/kalman.hpp"
 
 #include <Eigen/Cholesky>
 

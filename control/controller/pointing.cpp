@@ -1,4 +1,4 @@
-#include "control/pointing.hpp"
+#include "control/controller/pointing.hpp"
 
 #include <Eigen/Dense>
 

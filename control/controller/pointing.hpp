@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 
 namespace ptz::control {
 

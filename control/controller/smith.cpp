@@ -1,4 +1,4 @@
-#include "control/smith.hpp"
+#include "control/controller/smith.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
 
 namespace ptz::control {
 

@@ -1,4 +1,4 @@
-#include "control/identify.hpp"
+#include "control/identify/identify.hpp"
 
 #include <opencv2/core/optim.hpp>
 

@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <string>
 
-#include "control/identify.hpp"
-#include "control/stability.hpp"
-#include "ptz/config.hpp"
+#include "common/config.hpp"
+#include "control/identify/identify.hpp"
+#include "control/stability/stability.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 

@@ -1,4 +1,4 @@
-#include "control/stability.hpp"
+#include "control/stability/stability.hpp"
 
 #include <Eigen/Eigenvalues>
 

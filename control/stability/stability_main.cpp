@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "control/smith.hpp"
-#include "control/stability.hpp"
-#include "control/track_analysis.hpp"
-#include "ptz/config.hpp"
+#include "common/config.hpp"
+#include "control/controller/smith.hpp"
+#include "control/stability/stability.hpp"
+#include "control/stability/track_analysis.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "control/track_analysis.hpp"
+#include "control/stability/track_analysis.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -9,11 +9,11 @@
 #include <memory>
 #include <sstream>
 
-#include "perception/calibration.hpp"
-#include "perception/calibration_files.hpp"
-#include "perception/calibration_live.hpp"
-#include "perception/calibration_steps.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/calibrate/calibration.hpp"
+#include "perception/calibrate/calibration_files.hpp"
+#include "perception/calibrate/calibration_live.hpp"
+#include "perception/calibrate/calibration_steps.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 
 namespace ptz::perception {

@@ -1,4 +1,4 @@
-#include "perception/calibration.hpp"
+#include "perception/calibrate/calibration.hpp"
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>

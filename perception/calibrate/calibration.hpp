@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz/rig.hpp"
+#include "common/config.hpp"
+#include "common/rig.hpp"
 
 namespace ptz::perception {
 

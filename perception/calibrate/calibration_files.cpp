@@ -1,4 +1,4 @@
-#include "perception/calibration_files.hpp"
+#include "perception/calibrate/calibration_files.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 

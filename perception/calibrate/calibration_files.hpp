@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "perception/calibration.hpp"
+#include "perception/calibrate/calibration.hpp"
 
 namespace ptz::perception {
 

@@ -4,7 +4,7 @@
 #include <fstream>
 #include <iomanip>
 
-#include "perception/calibration.hpp"
+#include "perception/calibrate/calibration.hpp"
 
 namespace ptz::perception {
 

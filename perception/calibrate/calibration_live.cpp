@@ -1,4 +1,4 @@
-#include "perception/calibration_live.hpp"
+#include "perception/calibrate/calibration_live.hpp"
 
 #include <opencv2/imgproc.hpp>
 

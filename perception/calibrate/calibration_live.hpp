@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "perception/calibration.hpp"
+#include "perception/calibrate/calibration.hpp"
 
 namespace ptz::perception {
 

@@ -1,4 +1,4 @@
-#include "perception/calibration_steps.hpp"
+#include "perception/calibrate/calibration_steps.hpp"
 
 namespace ptz::perception {
 

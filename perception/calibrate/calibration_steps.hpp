@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "perception/calibration_files.hpp"
-#include "perception/ptz_calibration.hpp"
+#include "perception/calibrate/calibration_files.hpp"
+#include "perception/calibrate/ptz_calibration.hpp"
 
 namespace ptz::perception {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <map>
 
-#include "perception/ptz_calibration.hpp"
+#include "perception/calibrate/ptz_calibration.hpp"
 
 namespace ptz::perception {
 namespace {

@@ -1,4 +1,4 @@
-#include "perception/ptz_calibration.hpp"
+#include "perception/calibrate/ptz_calibration.hpp"
 
 #include <opencv2/calib3d.hpp>
 

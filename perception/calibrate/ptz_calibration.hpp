@@ -9,8 +9,8 @@
 #include <limits>
 #include <vector>
 
-#include "perception/calibration.hpp"
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
+#include "perception/calibrate/calibration.hpp"
 
 namespace ptz::perception {
 

@@ -1,5 +1,5 @@
 // All of the project's PCL code.
-#include "perception/cloud.hpp"
+#include "perception/depth/cloud.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/common/point_tests.h>
@@ -13,7 +13,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::perception {
 

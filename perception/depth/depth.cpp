@@ -1,4 +1,4 @@
-#include "perception/depth.hpp"
+#include "perception/depth/depth.hpp"
 
 #include <opencv2/core/eigen.hpp>
 #include <opencv2/imgproc.hpp>
@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::perception {
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 
 namespace cv::ximgproc {
 class DisparityWLSFilter;

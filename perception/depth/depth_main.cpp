@@ -8,9 +8,9 @@
 #include <memory>
 #include <optional>
 
-#include "perception/cloud.hpp"
-#include "perception/depth.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/depth/cloud.hpp"
+#include "perception/depth/depth.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"

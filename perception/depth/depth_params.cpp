@@ -1,6 +1,6 @@
 // The parameters of ptz-depth and ptz-depth-eval: declared once, read once.
-#include "perception/depth.hpp"
-#include "ptz/config.hpp"
+#include "common/config.hpp"
+#include "perception/depth/depth.hpp"
 
 namespace ptz::perception {
 

@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <iostream>
 
-#include "perception/depth.hpp"
-#include "perception/stereo_eval.hpp"
-#include "ptz/config.hpp"
+#include "common/config.hpp"
+#include "perception/depth/depth.hpp"
+#include "perception/depth_eval/stereo_eval.hpp"
 
 namespace {
 

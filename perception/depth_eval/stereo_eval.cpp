@@ -1,11 +1,11 @@
-#include "perception/stereo_eval.hpp"
+#include "perception/depth_eval/stereo_eval.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <limits>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::perception {
 

@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <memory>
 
-#include "perception/detector.hpp"
-#include "perception/stereo.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/detect/detector.hpp"
+#include "perception/detect/stereo.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"

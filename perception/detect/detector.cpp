@@ -1,4 +1,4 @@
-#include "perception/detector.hpp"
+#include "perception/detect/detector.hpp"
 
 #include <opencv2/imgproc.hpp>
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::perception {
 

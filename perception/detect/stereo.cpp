@@ -1,4 +1,4 @@
-#include "perception/stereo.hpp"
+#include "perception/detect/stereo.hpp"
 
 #include <opencv2/calib3d.hpp>
 

@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "perception/detector.hpp"
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
+#include "perception/detect/detector.hpp"
 
 namespace ptz::perception {
 

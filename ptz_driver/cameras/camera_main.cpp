@@ -7,9 +7,9 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "ptz/transport.hpp"
-#include "ptz_driver/gpio_fake.hpp"
-#include "ptz_driver/stereo_camera.hpp"
+#include "common/transport.hpp"
+#include "ptz_driver/cameras/stereo_camera.hpp"
+#include "ptz_driver/emulators/emulated_gpio_chip.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 
@@ -97,7 +97,7 @@ class CameraNode {
   // The pulses start before the cameras open: their first frames already answer one.
   void startTrigger(const TriggerParams& t) {
     if (t.chip == "sim") {
-      auto chip = std::make_unique<FakeGpio>(std::vector<FakeAxisSpec>{}, 0, 1e-4);
+      auto chip = std::make_unique<EmulatedGpioChip>(std::vector<EmulatedAxisSpec>{}, 0, 1e-4);
       chip->useClock(gpioClockS);
       chip->addOutput(t.line);
       trigger_chip_ = std::move(chip);

@@ -1,4 +1,4 @@
-#include "ptz_driver/ptz_history.hpp"
+#include "ptz_driver/cameras/ptz_history.hpp"
 
 #include <algorithm>
 #include <cmath>

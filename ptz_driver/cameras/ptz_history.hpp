@@ -7,7 +7,7 @@
 #include <deque>
 #include <optional>
 
-#include "ptz/rig.hpp"  // PtzPose, Side
+#include "common/rig.hpp"  // PtzPose, Side
 
 namespace ptz::driver {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/stereo_camera.hpp"
+#include "ptz_driver/cameras/stereo_camera.hpp"
 
 #include <sys/stat.h>
 
@@ -35,7 +35,7 @@ std::string joined(const std::vector<std::string>& parts) {
 void declareCameraParams(Params& p) {
   p.add("left_source", "",
         "left camera: V4L2 index or /dev/videoN, rtsp:// URL, GStreamer pipeline ending in "
-        "appsink, video file or image folder (rules in ptz_driver/README.md)");
+        "appsink, video file or image folder (rules in ptz_driver/cameras/README.md)");
   p.add("right_source", "", "right camera, in the same forms");
   p.add("left_timestamps", "",
         "left video/folder capture times, one per line in us (empty: SOURCE.timestamps when it "

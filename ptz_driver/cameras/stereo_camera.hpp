@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz_driver/capture_source.hpp"
-#include "ptz_driver/ptz_history.hpp"
-#include "ptz_driver/source_supervisor.hpp"
-#include "ptz_driver/stereo_pairer.hpp"
-#include "ptz_driver/trigger.hpp"
+#include "common/config.hpp"
+#include "ptz_driver/cameras/ptz_history.hpp"
+#include "ptz_driver/cameras/sources/capture_source.hpp"
+#include "ptz_driver/cameras/sources/source_supervisor.hpp"
+#include "ptz_driver/cameras/stereo_pairer.hpp"
+#include "ptz_driver/cameras/trigger.hpp"
 
 namespace ptz::driver {
 

@@ -1,11 +1,11 @@
-#include "ptz_driver/stereo_pairer.hpp"
+#include "ptz_driver/cameras/stereo_pairer.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 
-#include "ptz/measure.hpp"
+#include "common/measure.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "ptz/rig.hpp"  // Side
-#include "ptz_driver/camera_source.hpp"
+#include "common/rig.hpp"  // Side
+#include "ptz_driver/cameras/sources/frame_source.hpp"
 
 namespace ptz::driver {
 

@@ -1,11 +1,11 @@
-#include "ptz_driver/trigger.hpp"
+#include "ptz_driver/cameras/trigger.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "ptz/measure.hpp"
+#include "common/measure.hpp"
 
 namespace ptz::driver {
 namespace {

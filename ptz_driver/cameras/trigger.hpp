@@ -17,9 +17,9 @@
 #include <thread>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz/rig.hpp"  // Side
-#include "ptz_driver/gpio_lines.hpp"
+#include "common/config.hpp"
+#include "common/rig.hpp"  // Side
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 

@@ -1,9 +1,9 @@
-#include "ptz_driver/gpio_fake.hpp"
+#include "ptz_driver/emulators/emulated_gpio_chip.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::driver {
 namespace {
@@ -21,7 +21,8 @@ int64_t countAt(double rad, double counts_per_rad) {
 
 }  // namespace
 
-FakeGpio::FakeGpio(std::vector<FakeAxisSpec> axes, double start_s, double substep_s)
+EmulatedGpioChip::EmulatedGpioChip(std::vector<EmulatedAxisSpec> axes, double start_s,
+                                   double substep_s)
     : now_s_(start_s), substep_s_(substep_s) {
   for (auto& spec : axes) {
     Axis a;
@@ -40,12 +41,12 @@ FakeGpio::FakeGpio(std::vector<FakeAxisSpec> axes, double start_s, double subste
   }
 }
 
-void FakeGpio::addOutput(int offset) {
+void EmulatedGpioChip::addOutput(int offset) {
   std::lock_guard<std::mutex> lock(mutex_);
   lines_[offset].output = true;
 }
 
-FakeGpio::Line& FakeGpio::line(int offset, const std::string& name) {
+EmulatedGpioChip::Line& EmulatedGpioChip::line(int offset, const std::string& name) {
   const auto it = lines_.find(offset);
   if (it == lines_.end() || it->second.requested) {
     throw ConfigError("parameter '" + name + "': the simulated GPIO chip has no line " +
@@ -55,20 +56,20 @@ FakeGpio::Line& FakeGpio::line(int offset, const std::string& name) {
   return it->second;
 }
 
-void FakeGpio::requestOutput(int offset, const std::string& name, bool idle_high) {
+void EmulatedGpioChip::requestOutput(int offset, const std::string& name, bool idle_high) {
   std::lock_guard<std::mutex> lock(mutex_);
   Line& l = line(offset, name);
   if (!l.output) throw ConfigError("parameter '" + name + "': simulated line is an input");
   l.level = idle_high;
 }
 
-void FakeGpio::requestEvents(int offset, Bias, const std::string& name) {
+void EmulatedGpioChip::requestEvents(int offset, Bias, const std::string& name) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (line(offset, name).output)
     throw ConfigError("parameter '" + name + "': simulated line is an output");
 }
 
-void FakeGpio::set(int offset, bool high) {
+void EmulatedGpioChip::set(int offset, bool high) {
   std::lock_guard<std::mutex> lock(mutex_);
   tick();
   const auto it = lines_.find(offset);
@@ -80,7 +81,7 @@ void FakeGpio::set(int offset, bool high) {
   it->second.level = high;
 }
 
-bool FakeGpio::get(int offset) {
+bool EmulatedGpioChip::get(int offset) {
   std::lock_guard<std::mutex> lock(mutex_);
   tick();
   const auto it = lines_.find(offset);
@@ -91,34 +92,34 @@ bool FakeGpio::get(int offset) {
   return it->second.level;
 }
 
-void FakeGpio::readEvents(std::vector<LineEvent>* out) {
+void EmulatedGpioChip::readEvents(std::vector<LineEvent>* out) {
   std::lock_guard<std::mutex> lock(mutex_);
   tick();
   out->insert(out->end(), events_.begin(), events_.end());
   events_.clear();
 }
 
-int64_t FakeGpio::ioErrors() const {
+int64_t EmulatedGpioChip::ioErrors() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return io_errors_;
 }
 
-void FakeGpio::advanceTo(double t_s) {
+void EmulatedGpioChip::advanceTo(double t_s) {
   std::lock_guard<std::mutex> lock(mutex_);
   advance(t_s);
 }
 
-void FakeGpio::useClock(std::function<double()> clock) {
+void EmulatedGpioChip::useClock(std::function<double()> clock) {
   std::lock_guard<std::mutex> lock(mutex_);
   clock_ = std::move(clock);
   now_s_ = clock_();
 }
 
-void FakeGpio::tick() {
+void EmulatedGpioChip::tick() {
   if (clock_) advance(clock_());
 }
 
-void FakeGpio::advance(double t_s) {
+void EmulatedGpioChip::advance(double t_s) {
   while (now_s_ < t_s) {
     const double h_s = std::min(substep_s_, t_s - now_s_);
     step_events_.clear();
@@ -136,8 +137,8 @@ void FakeGpio::advance(double t_s) {
   }
 }
 
-void FakeGpio::integrate(Axis& a, double h_s) {
-  const FakeAxisSpec& s = a.spec;
+void EmulatedGpioChip::integrate(Axis& a, double h_s) {
+  const EmulatedAxisSpec& s = a.spec;
   const AxisLines& l = s.lines;
   double drive = 0;  // -1, 0, +1: the bridge's output
   if (lines_[l.enable].level) {
@@ -187,56 +188,56 @@ void FakeGpio::integrate(Axis& a, double h_s) {
   }
 }
 
-double FakeGpio::nowS() const {
+double EmulatedGpioChip::nowS() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return now_s_;
 }
-double FakeGpio::positionRad(size_t axis) const {
+double EmulatedGpioChip::positionRad(size_t axis) const {
   std::lock_guard<std::mutex> lock(mutex_);
   return axes_.at(axis).position_rad;
 }
-double FakeGpio::speedRadS(size_t axis) const {
+double EmulatedGpioChip::speedRadS(size_t axis) const {
   std::lock_guard<std::mutex> lock(mutex_);
   return axes_.at(axis).speed_rad_s;
 }
-double FakeGpio::maxPositionRad(size_t axis) const {
+double EmulatedGpioChip::maxPositionRad(size_t axis) const {
   std::lock_guard<std::mutex> lock(mutex_);
   return axes_.at(axis).max_rad;
 }
-double FakeGpio::minPositionRad(size_t axis) const {
+double EmulatedGpioChip::minPositionRad(size_t axis) const {
   std::lock_guard<std::mutex> lock(mutex_);
   return axes_.at(axis).min_rad;
 }
-bool FakeGpio::level(int offset) const {
+bool EmulatedGpioChip::level(int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = lines_.find(offset);
   return it != lines_.end() && it->second.level;
 }
-double FakeGpio::highTimeS(int offset) const {
+double EmulatedGpioChip::highTimeS(int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = lines_.find(offset);
   return it == lines_.end() ? 0 : it->second.high_s;
 }
-int64_t FakeGpio::risingEdges(int offset) const {
+int64_t EmulatedGpioChip::risingEdges(int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = lines_.find(offset);
   return it == lines_.end() ? 0 : it->second.rising;
 }
 
-FakeGpio::OutputTally FakeGpio::tally(int offset) const {
+EmulatedGpioChip::OutputTally EmulatedGpioChip::tally(int offset) const {
   std::lock_guard<std::mutex> lock(mutex_);
   const auto it = lines_.find(offset);
   if (it == lines_.end()) return {now_s_, 0, 0};
   return {now_s_, it->second.high_s, it->second.rising};
 }
 
-void FakeGpio::setSwitch(size_t axis, bool max_end, double position_rad) {
+void EmulatedGpioChip::setSwitch(size_t axis, bool max_end, double position_rad) {
   std::lock_guard<std::mutex> lock(mutex_);
   Axis& a = axes_.at(axis);
   (max_end ? a.spec.max_switch_rad : a.spec.min_switch_rad) = position_rad;
 }
 
-void FakeGpio::injectEvent(int offset, bool rising) {
+void EmulatedGpioChip::injectEvent(int offset, bool rising) {
   std::lock_guard<std::mutex> lock(mutex_);
   events_.push_back({offset, rising, now_s_});
 }

@@ -11,12 +11,12 @@
 #include <mutex>
 #include <vector>
 
-#include "ptz_driver/gpio_axis.hpp"  // AxisLines
-#include "ptz_driver/gpio_lines.hpp"
+#include "ptz_driver/heads/gpio/gpio_axis.hpp"  // AxisLines
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 
-struct FakeAxisSpec {
+struct EmulatedAxisSpec {
   AxisLines lines;
   double counts_per_rad = 1000;                        // x4 counts
   double max_speed_rad_s = 4;                          // at a duty of 1
@@ -27,9 +27,10 @@ struct FakeAxisSpec {
   bool reversed = false;  // the motor's leads swapped: it turns toward min when driven to max
 };
 
-class FakeGpio : public GpioLines {
+class EmulatedGpioChip : public GpioLines {
  public:
-  explicit FakeGpio(std::vector<FakeAxisSpec> axes, double start_s = 0, double substep_s = 10e-6);
+  explicit EmulatedGpioChip(std::vector<EmulatedAxisSpec> axes, double start_s = 0,
+                            double substep_s = 10e-6);
 
   using GpioLines::requestOutput;
   void requestOutput(int line, const std::string& name, bool idle_high) override;
@@ -73,7 +74,7 @@ class FakeGpio : public GpioLines {
     int64_t rising = 0;
   };
   struct Axis {
-    FakeAxisSpec spec;
+    EmulatedAxisSpec spec;
     double position_rad = 0, speed_rad_s = 0, max_rad = 0, min_rad = 0;
   };
   void tick();

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <array>
 
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
 
 namespace ptz::driver {
 

@@ -1,9 +1,9 @@
-#include "ptz_driver/pelco_d_emulator.hpp"
+#include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
 
 #include <algorithm>
 #include <utility>
 
-#include "ptz_driver/pelco_d.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 
 namespace ptz::driver {
 

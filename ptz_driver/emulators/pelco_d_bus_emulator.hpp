@@ -9,9 +9,9 @@
 #include <array>
 #include <vector>
 
-#include "ptz_driver/emulated_motors.hpp"
-#include "ptz_driver/pelco_model.hpp"
-#include "ptz_driver/visca.hpp"  // Bytes
+#include "ptz_driver/emulators/emulated_motors.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_model.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"  // Bytes
 
 namespace ptz::driver {
 

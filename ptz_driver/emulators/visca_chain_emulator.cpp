@@ -1,4 +1,4 @@
-#include "ptz_driver/visca_chain_emulator.hpp"
+#include "ptz_driver/emulators/visca_chain_emulator.hpp"
 
 #include <algorithm>
 

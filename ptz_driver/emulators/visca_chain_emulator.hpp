@@ -12,8 +12,8 @@
 #include <optional>
 #include <vector>
 
-#include "ptz_driver/emulated_motors.hpp"
-#include "ptz_driver/visca_camera.hpp"
+#include "ptz_driver/emulators/emulated_motors.hpp"
+#include "ptz_driver/emulators/visca_camera_emulator.hpp"
 
 namespace ptz::driver {
 

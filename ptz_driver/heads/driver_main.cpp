@@ -11,10 +11,11 @@
 #include <cmath>
 #include <memory>
 
-#include "ptz/plant.hpp"
-#include "ptz/transport.hpp"
-#include "ptz_driver/head_factory.hpp"
-#include "ptz_driver/heads_stop.hpp"
+#include "common/plant.hpp"
+#include "common/transport.hpp"
+#include "ptz_driver/emulators/emulated_gpio_heads.hpp"  // gpio_chip "sim"
+#include "ptz_driver/heads/head_factory.hpp"
+#include "ptz_driver/heads/heads_stop.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 
@@ -23,7 +24,7 @@ namespace {
 
 void declare(Params& p) {
   addTransportParams(p);
-  addPlantParams(p);  // the limits every setpoint is clamped to
+  addAxisLimitParams(p);  // the limits every setpoint is clamped to
   declareBackendParams(p);
   p.add("state_rate_hz", 50.0, "Hz", "position inquiries and PTZ_STATE per second");
   p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time");
@@ -42,14 +43,14 @@ class DriverNode {
       : p_(p),
         lcm_(lcm),
         status_(lcm, p, "ptz-driver"),
-        limits_(plantParamsFrom(p)),
+        limits_(axisLimitsFrom(p)),
         inquiry_timeout_s_(p.getDouble("inquiry_timeout_s")),
         deadman_s_(p.getDouble("deadman_s")),
         max_setpoint_age_s_(p.getDouble("max_setpoint_age_s")),
         max_setpoint_rate_(p.getDouble("max_setpoint_rate")),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)) {
-    heads_ = makeHeads(p);
+    heads_ = makeHeads(p, openGpioChipOrEmulator);
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, ch_setpoint_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },

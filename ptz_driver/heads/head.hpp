@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "ptz/rig.hpp"  // PtzPose
+#include "common/rig.hpp"  // PtzPose
 
 namespace ptz::driver {
 

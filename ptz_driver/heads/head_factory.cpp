@@ -1,35 +1,45 @@
-#include "ptz_driver/head_factory.hpp"
+#include "ptz_driver/heads/head_factory.hpp"
 
 #include <stdexcept>
 
-#include "ptz/plant.hpp"
-#include "ptz_driver/gpio_factory.hpp"
-#include "ptz_driver/pelco_d_head.hpp"
-#include "ptz_driver/visca_ip_head.hpp"
-#include "ptz_driver/visca_serial_head.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
+#include "ptz_driver/heads/visca/visca_ip_head.hpp"
+#include "ptz_driver/heads/visca/visca_serial_head.hpp"
 
 namespace ptz::driver {
 
 void declareBackendParams(Params& p) {
   p.add("backend", "visca_ip", "visca_ip, visca_serial, pelco_d or gpio");
-  p.add("visca_model", "", "VISCA camera model file (config/visca/*.yaml); required for VISCA");
-  p.add("left_host", "127.0.0.1", "left camera's IPv4 address");
-  p.add("left_port", 52381, "", "left camera's VISCA-over-IP UDP port");
-  p.add("right_host", "127.0.0.1", "right camera's IPv4 address");
-  p.add("right_port", 52382, "", "right camera's VISCA-over-IP UDP port");
-  p.add("left_serial_device", "/dev/ttyUSB0", "left head's serial port (visca_serial, pelco_d)");
+  p.add("visca_model", "",
+        "backend visca_ip, visca_serial: camera model file (config/visca/*.yaml); required");
+  p.add("left_host", "127.0.0.1", "backend visca_ip: left camera's IPv4 address");
+  p.add("left_port", 52381, "", "backend visca_ip: left camera's UDP port");
+  p.add("right_host", "127.0.0.1", "backend visca_ip: right camera's IPv4 address");
+  p.add("right_port", 52382, "", "backend visca_ip: right camera's UDP port");
+  p.add("left_serial_device", "/dev/ttyUSB0",
+        "backend visca_serial, pelco_d: left head's serial port");
   p.add("right_serial_device", "/dev/ttyUSB0",
-        "right head's serial port; the left's: both on one line (daisy chain, RS-485 bus)");
-  p.add("serial_baud", 9600, "baud", "serial VISCA baud rate (2400 .. 115200, the camera's)");
-  p.add("left_visca_address", 1, "", "left camera's VISCA address (1: first on the chain)");
+        "backend visca_serial, pelco_d: right head's serial port; the left's: both on one line "
+        "(daisy chain, RS-485 bus)");
+  p.add("serial_baud", 9600, "baud",
+        "backend visca_serial: baud rate (2400 .. 115200, the camera's)");
+  p.add("left_visca_address", 1, "",
+        "backend visca_serial: left camera's address (1: first on the chain)");
   p.add("right_visca_address", 0, "",
-        "right camera's VISCA address; 0: 2 on the left's line, 1 on a line of its own");
-  p.add("pelco_model", "", "Pelco-D head model file (config/pelco_d/*.yaml); required for pelco_d");
-  p.add("pelco_baud", 2400, "baud", "Pelco-D baud rate (the heads' DIP switches)");
-  p.add("left_pelco_address", 1, "", "left head's Pelco-D address (DIP switches)");
-  p.add("right_pelco_address", 2, "", "right head's Pelco-D address (DIP switches)");
+        "backend visca_serial: right camera's address; 0: 2 on the left's line, 1 on a line of "
+        "its own");
+  p.add("pelco_model", "", "backend pelco_d: head model file (config/pelco_d/*.yaml); required");
+  p.add("pelco_baud", 2400, "baud", "backend pelco_d: baud rate (the heads' DIP switches)");
+  p.add("left_pelco_address", 1, "", "backend pelco_d: left head's address (DIP switches)");
+  p.add("right_pelco_address", 2, "", "backend pelco_d: right head's address (DIP switches)");
   p.add("pelco_position_query", false,
-        "the heads answer position queries 0x51/0x53/0x55 (else the position is estimated)");
+        "backend pelco_d: the heads answer position queries 0x51/0x53/0x55 (else the position "
+        "is estimated)");
+  p.add("pelco_time_constant_s", defaultPlantParams().axis[0].time_constant_s, "s",
+        "backend pelco_d without position queries: time constant of the estimated motion "
+        "of every axis");
   declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
 }
 
@@ -73,7 +83,8 @@ std::array<std::shared_ptr<Line>, 2> openLines(const Params& p, const std::strin
 
 }  // namespace
 
-std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p) {
+std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
+                                                  const GpioChipOpener& open_gpio) {
   const std::string backend = p.getString("backend");
   std::array<std::unique_ptr<PtzHead>, 2> heads;
   if (backend == "visca_ip") {
@@ -112,12 +123,16 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p) {
     }
     const auto lines = openLines<PelcoDLine>(p, "pelco_baud");
     const bool query = p.getBool("pelco_position_query");
-    const PtzPlant::Params plant = plantParamsFrom(p);
+    // The estimate: each axis a first-order lag within the limits, at most max_rate fast.
+    PtzPlant::Params plant = axisLimitsFrom(p);
+    const double time_constant_s = p.getDouble("pelco_time_constant_s");
+    if (!(time_constant_s > 0)) throw ConfigError("parameter 'pelco_time_constant_s' must be > 0");
+    for (AxisParams& a : plant.axis) a.time_constant_s = time_constant_s;
     heads[0] = std::make_unique<PelcoDHead>(model, lines[0], left, query, plant);
     heads[1] = std::make_unique<PelcoDHead>(model, lines[1], right, query, plant);
     return heads;
   }
-  if (backend == "gpio") return makeGpioHeads(p);
+  if (backend == "gpio") return makeGpioHeads(p, open_gpio);
   throw ConfigError("parameter 'backend': unknown backend '" + backend +
                     "' (visca_ip, visca_serial, pelco_d, gpio)");
 }

@@ -5,13 +5,16 @@
 #include <array>
 #include <memory>
 
-#include "ptz/config.hpp"
-#include "ptz_driver/head.hpp"
+#include "common/config.hpp"
+#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/head.hpp"
 
 namespace ptz::driver {
 
 void declareBackendParams(Params& p);
-// Throws ConfigError naming the parameter (or file and field) that is wrong.
-std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p);
+// Throws ConfigError naming the parameter (or file and field) that is wrong. GPIO heads get their
+// lines from open_gpio.
+std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
+                                                  const GpioChipOpener& open_gpio = openGpioChip);
 
 }  // namespace ptz::driver

@@ -18,11 +18,11 @@
 #include <utility>
 #include <vector>
 
-#include "ptz_driver/backoff.hpp"
-#include "ptz_driver/head_book.hpp"
-#include "ptz_driver/pelco_d.hpp"
-#include "ptz_driver/serial_port.hpp"
-#include "ptz_driver/visca.hpp"
+#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"
+#include "ptz_driver/io/backoff.hpp"
+#include "ptz_driver/io/serial_port.hpp"
 
 namespace ptz::driver {
 

@@ -1,9 +1,9 @@
-#include "ptz_driver/zoom_table.hpp"
+#include "ptz_driver/heads/zoom_table.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::driver {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/backoff.hpp"
+#include "ptz_driver/io/backoff.hpp"
 
 #include <algorithm>
 #include <cstdio>

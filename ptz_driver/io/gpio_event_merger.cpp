@@ -1,4 +1,4 @@
-#include "ptz_driver/gpio_event_merger.hpp"
+#include "ptz_driver/io/gpio_event_merger.hpp"
 
 #include <algorithm>
 

@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "ptz_driver/gpio_lines.hpp"
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 

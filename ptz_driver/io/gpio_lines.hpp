@@ -1,6 +1,6 @@
 // GPIO lines as the DC-motor heads use them: outputs (direction, PWM enable), inputs with edge
 // events and timestamps (encoder A/B, limit switches). Two providers: libgpiod 1.6 on a real
-// chip (openGpiodChip) and a simulated head for tests (gpio_fake.hpp).
+// chip (openGpiodChip) and a simulated head for tests (emulated_gpio_chip.hpp).
 #pragma once
 
 #include <cstdint>

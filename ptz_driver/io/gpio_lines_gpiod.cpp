@@ -11,9 +11,9 @@
 #include <map>
 #include <set>
 
-#include "ptz/config.hpp"
-#include "ptz_driver/gpio_event_merger.hpp"
-#include "ptz_driver/gpio_lines.hpp"
+#include "common/config.hpp"
+#include "ptz_driver/io/gpio_event_merger.hpp"
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 namespace {

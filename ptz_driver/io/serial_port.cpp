@@ -1,4 +1,4 @@
-#include "ptz_driver/serial_port.hpp"
+#include "ptz_driver/io/serial_port.hpp"
 
 #include <fcntl.h>
 #include <poll.h>
@@ -10,7 +10,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "ptz_driver/visca.hpp"  // Bytes
+#include "ptz_driver/io/bytes.hpp"
 
 namespace ptz::driver {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/udp.hpp"
+#include "ptz_driver/io/udp.hpp"
 
 #include <arpa/inet.h>
 #include <fcntl.h>

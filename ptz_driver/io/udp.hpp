@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <string>
 
-#include "ptz_driver/visca.hpp"  // Bytes
+#include "ptz_driver/io/bytes.hpp"
 
 namespace ptz::driver {
 

@@ -3,7 +3,7 @@
 
 #include <fstream>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 #include "sim/scene.hpp"
 
 namespace {
@@ -50,6 +50,18 @@ TEST(Params, FlagsOverrideTheConfigFile) {
   ptz::Params q = makeParams();
   EXPECT_EQ(parseError(q, {"prog", "--rate-hz", "12.5"}), "");
   EXPECT_DOUBLE_EQ(q.getDouble("rate_hz"), 12.5);
+  // The README tables (--help-markdown): parameters as declared, then sections; a '|' escaped.
+  ptz::Params t("prog", "test");
+  t.add("rate_hz", 30.0, "Hz", "rate");
+  t.addSection("objects", "shape: sphere|box");
+  t.addSection("chessboard", "board");
+  EXPECT_EQ(
+      t.markdownTable(),
+      "| parameter | unit | default | meaning |\n|---|---|---|---|\n"
+      "| `config` |  |  | YAML config file (OpenCV FileStorage); flags override its values |\n"
+      "| `rate_hz` | Hz | 30 | rate |\n"
+      "| `objects:` (section) |  |  | shape: sphere\\|box |\n"
+      "| `chessboard:` (section) |  |  | board |\n");
 }
 
 TEST(Params, ErrorsNameTheFileFieldOrFlag) {

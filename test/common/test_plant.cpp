@@ -5,7 +5,7 @@
 #include <limits>
 #include <random>
 
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
 
 using ptz::AxisParams;
 using ptz::Pt1Axis;

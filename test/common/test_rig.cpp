@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <fstream>
 
-#include "ptz/config.hpp"
-#include "ptz/rig.hpp"
+#include "common/config.hpp"
+#include "common/rig.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"

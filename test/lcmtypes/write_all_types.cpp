@@ -1,5 +1,5 @@
 // Writes one message of every project type to an LCM log, each on a channel named after its type,
-// with known field values; test/java/DecodeAll.java decodes them with the types jar, as lcm-spy
+// with known field values; test/lcmtypes/DecodeAll.java decodes them with the types jar, as lcm-spy
 // does.
 #include <lcm/lcm-cpp.hpp>
 

@@ -7,8 +7,8 @@
 #include <random>
 #include <vector>
 
-#include "perception/calibration.hpp"
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
+#include "perception/calibrate/calibration.hpp"
 #include "sim/renderer.hpp"
 
 namespace ptz::test {

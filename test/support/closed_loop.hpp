@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
-#include "tools/run_metrics.hpp"
+#include "tools/logs/run_metrics.hpp"
 
 namespace ptz::test {
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-#include "ptz_driver/camera_source.hpp"
+#include "ptz_driver/cameras/sources/frame_source.hpp"
 
 namespace ptz::test {
 

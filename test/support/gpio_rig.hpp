@@ -6,8 +6,8 @@
 #include <memory>
 #include <string>
 
-#include "ptz_driver/gpio_fake.hpp"
-#include "ptz_driver/gpio_head.hpp"
+#include "ptz_driver/emulators/emulated_gpio_chip.hpp"
+#include "ptz_driver/heads/gpio/gpio_head.hpp"
 
 namespace ptz::test {
 
@@ -36,8 +36,8 @@ inline driver::AxisConfig testAxis(const std::string& name, int base) {
 
 // The motor behind an axis: 4 rad/s at full drive, time constant 50 ms, switches where the axis
 // expects them, end stops 0.1 rad beyond.
-inline driver::FakeAxisSpec fakeAxis(const driver::AxisConfig& c, double start_rad) {
-  driver::FakeAxisSpec s;
+inline driver::EmulatedAxisSpec fakeAxis(const driver::AxisConfig& c, double start_rad) {
+  driver::EmulatedAxisSpec s;
   s.lines = c.lines;
   s.counts_per_rad = c.counts_per_rad;
   s.max_speed_rad_s = 4;
@@ -52,10 +52,10 @@ inline driver::FakeAxisSpec fakeAxis(const driver::AxisConfig& c, double start_r
 
 struct GpioRig {
   // Pan on lines 0..5, tilt on 10..15; the fake is wired as `pan_spec` and `tilt_spec` say.
-  GpioRig(const driver::GpioHeadConfig& config, const driver::FakeAxisSpec& pan_spec,
-          const driver::FakeAxisSpec& tilt_spec) {
-    auto fake =
-        std::make_unique<driver::FakeGpio>(std::vector<driver::FakeAxisSpec>{pan_spec, tilt_spec});
+  GpioRig(const driver::GpioHeadConfig& config, const driver::EmulatedAxisSpec& pan_spec,
+          const driver::EmulatedAxisSpec& tilt_spec) {
+    auto fake = std::make_unique<driver::EmulatedGpioChip>(
+        std::vector<driver::EmulatedAxisSpec>{pan_spec, tilt_spec});
     chip = fake.get();
     head = std::make_unique<driver::GpioHead>(config, std::move(fake), false);
   }
@@ -83,7 +83,7 @@ struct GpioRig {
     return !done || done();
   }
 
-  driver::FakeGpio* chip = nullptr;
+  driver::EmulatedGpioChip* chip = nullptr;
   std::unique_ptr<driver::GpioHead> head;
   double t_s = 0;
 };

@@ -7,7 +7,7 @@
 
 #include <cstdint>
 
-#include "ptz_driver/pelco_d_emulator.hpp"
+#include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
 
 namespace ptz::test {
 

@@ -2,9 +2,9 @@
 // publishes it, for tests that feed a process themselves.
 #pragma once
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "sim/sim_messages.hpp"
 #include "sim/simulator.hpp"
-#include "sim_messages.hpp"
 
 namespace ptz::test {
 

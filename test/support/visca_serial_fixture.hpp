@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "ptz/plant.hpp"
-#include "ptz_driver/visca_chain_emulator.hpp"
-#include "ptz_driver/visca_serial_head.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/emulators/visca_chain_emulator.hpp"
+#include "ptz_driver/heads/visca/visca_serial_head.hpp"
 #include "support/pty_pair.hpp"
 
 namespace ptz::test {

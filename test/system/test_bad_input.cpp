@@ -9,7 +9,7 @@
 #include <map>
 #include <set>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"

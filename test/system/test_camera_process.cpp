@@ -17,7 +17,7 @@
 #include <map>
 #include <set>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/renderer.hpp"

@@ -11,7 +11,7 @@
 #include <map>
 #include <memory>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "support/camera_recording.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"

@@ -7,10 +7,10 @@
 #include <map>
 #include <memory>
 
-#include "control/pointing.hpp"
-#include "control/stability.hpp"
-#include "ptz/plant.hpp"
-#include "ptz/transport.hpp"
+#include "common/plant.hpp"
+#include "common/transport.hpp"
+#include "control/controller/pointing.hpp"
+#include "control/stability/stability.hpp"
 #include "support/closed_loop.hpp"
 
 using ptz::test::kConfig;

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <map>
 
-#include "perception/depth.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "perception/depth/depth.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"

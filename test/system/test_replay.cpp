@@ -7,10 +7,10 @@
 #include <map>
 #include <string>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "support/child_process.hpp"
-#include "tools/log_reader.hpp"
+#include "tools/logs/log_reader.hpp"
 
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;

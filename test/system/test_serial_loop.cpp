@@ -9,11 +9,11 @@
 #include <cmath>
 #include <map>
 
-#include "ptz/plant.hpp"
-#include "ptz/transport.hpp"
-#include "ptz_driver/pelco_d.hpp"
-#include "ptz_driver/pelco_d_emulator.hpp"
-#include "ptz_driver/visca_chain_emulator.hpp"
+#include "common/plant.hpp"
+#include "common/transport.hpp"
+#include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
+#include "ptz_driver/emulators/visca_chain_emulator.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <map>
 
-#include "ptz/plant.hpp"
-#include "ptz/transport.hpp"
+#include "common/plant.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

@@ -10,9 +10,9 @@
 #include <iterator>
 #include <map>
 
-#include "control/pointing.hpp"
-#include "control/stability.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "control/controller/pointing.hpp"
+#include "control/stability/stability.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

@@ -13,13 +13,13 @@
 #include <map>
 #include <random>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
-#include "tools/viewer.hpp"
+#include "tools/view/viewer.hpp"
 
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;

@@ -1,15 +1,15 @@
 // ptz-log-summary: what an LCM log holds, per channel (messages, rate, size), the stereo frames'
 // sequence gaps, each process's last status counters, and the closed-loop numbers of the run
-// (tools/run_metrics.hpp). Text on stdout; --json writes the run's summary.json.
+// (tools/logs/run_metrics.hpp). Text on stdout; --json writes the run's summary.json.
 #include <lcm/lcm-cpp.hpp>
 
 #include <cstdio>
 #include <map>
 #include <string>
 
-#include "ptz/config.hpp"
-#include "tools/log_reader.hpp"
-#include "tools/run_metrics.hpp"
+#include "common/config.hpp"
+#include "tools/logs/log_reader.hpp"
+#include "tools/logs/run_metrics.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "tools/log_reader.hpp"
+#include "tools/logs/log_reader.hpp"
 
 #include <sys/stat.h>
 

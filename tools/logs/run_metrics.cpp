@@ -1,12 +1,12 @@
-#include "tools/run_metrics.hpp"
+#include "tools/logs/run_metrics.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
-#include "ptz/rig.hpp"
-#include "ptz/transport.hpp"
+#include "common/rig.hpp"
+#include "common/transport.hpp"
 
 namespace ptz::tools {
 namespace {

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 #include "sim/simulator.hpp"
 
 int main(int argc, char** argv) {
@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
   Params p("ptz-render-still",
            "Renders the stereo pair of a ptz-sim scenario at one time and "
            "pose to <out>_left.png and <out>_right.png.");
-  addPlantParams(p);
+  addAxisLimitParams(p);
   p.add("rig_file", "", "rig file; empty: the built-in default rig");
   p.add("time_s", 0.0, "s", "scene time");
   p.add("pan_rad", 0.0, "rad", "pan of both cameras");
@@ -21,8 +21,13 @@ int main(int argc, char** argv) {
   p.add("zoom", 1.0, "", "zoom ratio of both cameras");
   p.add("noise_sigma", 2.0, "grey levels", "pixel noise");
   p.add("out", "still", "output file prefix");
+  // A ptz-sim config file reads as it is; what only moves or streams does not make a still.
   for (const char* ignored : {"clock", "encoding"}) p.add(ignored, "", "ignored (ptz-sim's)");
-  p.add("frame_rate_hz", 30.0, "Hz", "ignored (ptz-sim's)");
+  for (const char* ignored : {"frame_rate_hz", "dead_time_s", "plant_step_s", "pan_gain",
+                              "pan_time_constant_s", "tilt_gain", "tilt_time_constant_s",
+                              "zoom_gain", "zoom_time_constant_s"}) {
+    p.add(ignored, 0.0, "", "ignored (ptz-sim's motor model and rate)");
+  }
   p.addSection("scene", "as ptz-sim");
   p.addSection("objects", "as ptz-sim");
   p.addSection("chessboard", "as ptz-sim");
@@ -32,8 +37,8 @@ int main(int argc, char** argv) {
     sim::Scene scene = sim::Scene::fromConfig(p.section("scene"), p.section("objects"),
                                               p.section("chessboard"), where);
     const StereoRig rig = rigFromParams(p);
-    PtzPlant::Params plant = plantParamsFrom(p);
-    for (auto& axis : plant.axis) {  // motors reach the pose at once
+    PtzPlant::Params plant = axisLimitsFrom(p);
+    for (auto& axis : plant.axis) {  // motors reach the pose at once (gain 1)
       axis.dead_time_s = 0;
       axis.time_constant_s = 1e-4;
       axis.max_rate_per_s = 1e6;

@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
-#include "tools/log_reader.hpp"
+#include "tools/logs/log_reader.hpp"
 
 namespace {
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "tools/log_reader.hpp"
-#include "tools/run_metrics.hpp"
+#include "tools/logs/log_reader.hpp"
+#include "tools/logs/run_metrics.hpp"
 
 namespace ptz::tools {
 

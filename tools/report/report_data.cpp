@@ -2,11 +2,11 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "control/stability.hpp"
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
+#include "control/stability/stability.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
-#include "tools/report.hpp"
+#include "tools/report/report.hpp"
 
 namespace ptz::tools {
 namespace {

@@ -6,8 +6,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "ptz/config.hpp"
-#include "tools/report.hpp"
+#include "common/config.hpp"
+#include "tools/report/report.hpp"
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz-report",

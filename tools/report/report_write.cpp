@@ -7,8 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "ptz/transport.hpp"
-#include "tools/report.hpp"
+#include "common/transport.hpp"
+#include "tools/report/report.hpp"
 
 namespace ptz::tools {
 namespace {

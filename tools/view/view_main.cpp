@@ -10,10 +10,10 @@
 #include <map>
 #include <memory>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
-#include "tools/viewer.hpp"
+#include "tools/view/viewer.hpp"
 
 namespace ptz::tools {
 namespace {

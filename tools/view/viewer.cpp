@@ -1,11 +1,11 @@
-#include "tools/viewer.hpp"
+#include "tools/view/viewer.hpp"
 
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <cstdio>
 
-#include "perception/stereo.hpp"
+#include "perception/detect/stereo.hpp"
 
 namespace ptz::tools {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <optional>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"

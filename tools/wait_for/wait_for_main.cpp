@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "ptz/transport.hpp"
+#include "common/transport.hpp"
 
 namespace {
 struct Seen {

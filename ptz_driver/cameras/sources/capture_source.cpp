@@ -1,6 +1,6 @@
-#include "ptz_driver/capture_source.hpp"
+#include "ptz_driver/cameras/sources/capture_source.hpp"
 
-#include "ptz/measure.hpp"
+#include "common/measure.hpp"
 
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>

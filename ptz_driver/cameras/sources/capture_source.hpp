@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "ptz_driver/camera_source.hpp"
+#include "ptz_driver/cameras/sources/frame_source.hpp"
 
 namespace ptz::driver {
 

@@ -8,7 +8,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "ptz_driver/capture_source.hpp"
+#include "ptz_driver/cameras/sources/capture_source.hpp"
 
 namespace ptz::driver {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/camera_source.hpp"
+#include "ptz_driver/cameras/sources/frame_source.hpp"
 
 #include <opencv2/core/utility.hpp>
 
@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <fstream>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::driver {
 namespace {

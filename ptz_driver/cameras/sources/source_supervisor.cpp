@@ -1,4 +1,4 @@
-#include "ptz_driver/source_supervisor.hpp"
+#include "ptz_driver/cameras/sources/source_supervisor.hpp"
 
 #include <algorithm>
 

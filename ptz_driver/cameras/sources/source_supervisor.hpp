@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "ptz_driver/backoff.hpp"
-#include "ptz_driver/camera_source.hpp"
+#include "ptz_driver/cameras/sources/frame_source.hpp"
+#include "ptz_driver/io/backoff.hpp"
 
 namespace ptz::driver {
 

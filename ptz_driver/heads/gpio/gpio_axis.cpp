@@ -1,4 +1,4 @@
-#include "ptz_driver/gpio_axis.hpp"
+#include "ptz_driver/heads/gpio/gpio_axis.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -9,8 +9,8 @@
 #include <limits>
 #include <string>
 
-#include "ptz_driver/gpio_lines.hpp"
-#include "ptz_driver/quadrature.hpp"
+#include "ptz_driver/heads/gpio/quadrature.hpp"
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 

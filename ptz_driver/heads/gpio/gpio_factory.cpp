@@ -1,12 +1,11 @@
-#include "ptz_driver/gpio_factory.hpp"
+#include "ptz_driver/heads/gpio/gpio_factory.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <map>
 
-#include "ptz/measure.hpp"
-#include "ptz/plant.hpp"
-#include "ptz_driver/gpio_fake.hpp"
+#include "common/measure.hpp"
+#include "common/plant.hpp"
 
 namespace ptz::driver {
 namespace {
@@ -87,7 +86,7 @@ void declareGpioParams(Params& p) {
 }
 
 GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
-  const PtzPlant::Params plant = plantParamsFrom(p);
+  const PtzPlant::Params plant = axisLimitsFrom(p);
   GpioHeadConfig head;
   head.name = side;
   head.zoom = positive(p, "gpio_zoom");
@@ -138,29 +137,8 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
   return head;
 }
 
-std::vector<FakeAxisSpec> simulatedAxes(const GpioHeadConfig& head) {
-  std::vector<FakeAxisSpec> axes;
-  for (const AxisConfig* c : {&head.pan, &head.tilt}) {
-    FakeAxisSpec s;
-    s.lines = c->lines;
-    s.counts_per_rad = c->counts_per_rad;
-    s.min_switch_rad = c->min_switch_rad;
-    s.max_switch_rad = c->max_switch_rad;
-    s.min_stop_rad = c->min_switch_rad - 0.05;
-    s.max_stop_rad = c->max_switch_rad + 0.05;
-    s.start_rad = c->min_switch_rad + 0.3;
-    axes.push_back(s);
-  }
-  return axes;
-}
-
-std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
-  auto chip = std::make_unique<FakeGpio>(simulatedAxes(head));
-  chip->useClock(gpioClockS);
-  return chip;
-}
-
-std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p) {
+std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p,
+                                                      const GpioChipOpener& open_chip) {
   std::array<GpioHeadConfig, 2> configs = {gpioHeadConfig(p, "left"), gpioHeadConfig(p, "right")};
   // One line, one use: a clear error here instead of "busy" from the kernel.
   std::map<int, std::string> used;
@@ -181,10 +159,14 @@ std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p) {
   const std::string chip = p.getString("gpio_chip");
   std::array<std::unique_ptr<PtzHead>, 2> heads;
   for (size_t i = 0; i < 2; ++i) {
-    auto lines = chip == "sim" ? simulatedChip(configs[i]) : openGpiodChip(chip, "ptz-driver");
+    auto lines = open_chip(chip, configs[i]);
     heads[i] = std::make_unique<GpioHead>(configs[i], std::move(lines), true);
   }
   return heads;
+}
+
+std::unique_ptr<GpioLines> openGpioChip(const std::string& chip, const GpioHeadConfig&) {
+  return openGpiodChip(chip, "ptz-driver");
 }
 
 }  // namespace ptz::driver

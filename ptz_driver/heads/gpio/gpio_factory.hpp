@@ -1,16 +1,16 @@
 // The parameters of the GPIO DC-motor backend (`--backend gpio`) and the two heads built from
 // them. Every line offset, gain and limit is a parameter; the defaults are the Raspberry Pi 4
-// wiring of ptz_driver/README.md.
+// wiring of ptz_driver/heads/gpio/README.md.
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz_driver/gpio_fake.hpp"
-#include "ptz_driver/gpio_head.hpp"
+#include "common/config.hpp"
+#include "ptz_driver/heads/gpio/gpio_head.hpp"
 
 namespace ptz::driver {
 
@@ -18,12 +18,13 @@ void declareGpioParams(Params& p);
 // The configuration of head "left" or "right"; throws ConfigError naming the parameter that is
 // wrong (a line used twice, a switch too close to the soft limits, a gain out of range, ...).
 GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side);
-// Both heads, on the chip `gpio_chip` (libgpiod), or on simulated axes when it is "sim".
-std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p);
-// The simulated axes a configuration is wired to (gpio_chip "sim"): switches where configured,
-// end stops 0.05 rad beyond them, each axis 0.3 rad inside its min switch at power-up.
-std::vector<FakeAxisSpec> simulatedAxes(const GpioHeadConfig& head);
-// A simulated chip of those axes on the real-time clock (gpioClockS()).
-std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head);
+// Opens the lines of one head on the chip named by `gpio_chip`.
+using GpioChipOpener =
+    std::function<std::unique_ptr<GpioLines>(const std::string& chip, const GpioHeadConfig& head)>;
+// A real chip through libgpiod.
+std::unique_ptr<GpioLines> openGpioChip(const std::string& chip, const GpioHeadConfig& head);
+// Both heads, each on the lines open_chip gives it.
+std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(
+    const Params& p, const GpioChipOpener& open_chip = openGpioChip);
 
 }  // namespace ptz::driver

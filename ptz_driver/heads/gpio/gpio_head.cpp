@@ -1,4 +1,4 @@
-#include "ptz_driver/gpio_head.hpp"
+#include "ptz_driver/heads/gpio/gpio_head.hpp"
 
 #include <algorithm>
 #include <cerrno>

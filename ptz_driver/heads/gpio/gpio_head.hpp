@@ -13,9 +13,9 @@
 #include <thread>
 #include <vector>
 
-#include "ptz_driver/gpio_axis.hpp"
-#include "ptz_driver/gpio_lines.hpp"
-#include "ptz_driver/head.hpp"
+#include "ptz_driver/heads/gpio/gpio_axis.hpp"
+#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {
 

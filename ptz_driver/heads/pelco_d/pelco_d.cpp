@@ -1,4 +1,4 @@
-#include "ptz_driver/pelco_d.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 
 #include <algorithm>
 #include <cstdlib>

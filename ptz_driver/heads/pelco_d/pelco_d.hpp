@@ -3,14 +3,14 @@
 // directions; the extended commands 0x4B/0x4D/0x4F set absolute pan, tilt (hundredths of a
 // degree) and zoom positions, and 0x51/0x53/0x55 query them (replies 0x59/0x5B/0x5D) on the
 // heads that implement them; many cheap heads do not, and then the driver cannot report where
-// the head is (see ptz_driver/README.md).
+// the head is (see ptz_driver/heads/pelco_d/README.md).
 #pragma once
 
 #include <cstdint>
 #include <deque>
 #include <optional>
 
-#include "ptz_driver/visca.hpp"  // Bytes
+#include "ptz_driver/io/bytes.hpp"
 
 namespace ptz::driver::pelco_d {
 

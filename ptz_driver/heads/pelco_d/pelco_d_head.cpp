@@ -1,11 +1,11 @@
-#include "ptz_driver/pelco_d_head.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
 
-#include "ptz_driver/pelco_d.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -20,11 +20,11 @@
 #include <memory>
 #include <optional>
 
-#include "ptz/plant.hpp"
-#include "ptz_driver/head.hpp"
-#include "ptz_driver/head_book.hpp"
-#include "ptz_driver/pelco_model.hpp"
-#include "ptz_driver/serial_line.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_model.hpp"
+#include "ptz_driver/heads/serial_line.hpp"
 
 namespace ptz::driver {
 

@@ -1,9 +1,9 @@
-#include "ptz_driver/pelco_model.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_model.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "ptz/config.hpp"
+#include "common/config.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -1,4 +1,4 @@
-#include "ptz_driver/visca.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"
 
 #include <algorithm>
 

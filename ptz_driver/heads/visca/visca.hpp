@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-namespace ptz::driver {
+#include "ptz_driver/io/bytes.hpp"
 
-using Bytes = std::vector<uint8_t>;
+namespace ptz::driver {
 
 namespace visca {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/visca_head_core.hpp"
+#include "ptz_driver/heads/visca/visca_head_core.hpp"
 
 namespace ptz::driver {
 namespace {

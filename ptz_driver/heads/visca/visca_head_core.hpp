@@ -7,8 +7,8 @@
 #include <functional>
 #include <optional>
 
-#include "ptz_driver/head_book.hpp"
-#include "ptz_driver/visca_camera.hpp"
+#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/visca/visca_model.hpp"
 
 namespace ptz::driver {
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/visca_ip_head.hpp"
+#include "ptz_driver/heads/visca/visca_ip_head.hpp"
 
 namespace ptz::driver {
 

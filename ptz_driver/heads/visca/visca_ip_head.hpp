@@ -8,9 +8,9 @@
 #include <optional>
 #include <string>
 
-#include "ptz_driver/head.hpp"
-#include "ptz_driver/udp.hpp"
-#include "ptz_driver/visca_head_core.hpp"
+#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/visca/visca_head_core.hpp"
+#include "ptz_driver/io/udp.hpp"
 
 namespace ptz::driver {
 

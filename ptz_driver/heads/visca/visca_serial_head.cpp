@@ -1,4 +1,4 @@
-#include "ptz_driver/visca_serial_head.hpp"
+#include "ptz_driver/heads/visca/visca_serial_head.hpp"
 
 #include <algorithm>
 

@@ -19,9 +19,9 @@
 #include <memory>
 #include <optional>
 
-#include "ptz_driver/head.hpp"
-#include "ptz_driver/serial_line.hpp"
-#include "ptz_driver/visca_head_core.hpp"
+#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/serial_line.hpp"
+#include "ptz_driver/heads/visca/visca_head_core.hpp"
 
 namespace ptz::driver {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <random>
 
-#include "control/controller.hpp"
-#include "control/pointing.hpp"
+#include "control/controller/controller.hpp"
+#include "control/controller/pointing.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;

@@ -6,13 +6,13 @@
 #include <cmath>
 #include <random>
 
-#include "control/controller.hpp"
-#include "control/kalman.hpp"
-#include "control/pointing.hpp"
-#include "control/smith.hpp"
-#include "control/stability.hpp"
-#include "control/track_analysis.hpp"
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
+#include "control/controller/controller.hpp"
+#include "control/controller/kalman.hpp"
+#include "control/controller/pointing.hpp"
+#include "control/controller/smith.hpp"
+#include "control/stability/stability.hpp"
+#include "control/stability/track_analysis.hpp"
 #include "sim/scene.hpp"
 
 namespace pc = ptz::control;

@@ -3,10 +3,10 @@
 
 #include <cmath>
 
-#include "control/delay_monitor.hpp"
-#include "control/identify.hpp"
-#include "control/stability.hpp"
-#include "ptz/plant.hpp"
+#include "common/plant.hpp"
+#include "control/controller/delay_monitor.hpp"
+#include "control/identify/identify.hpp"
+#include "control/stability/stability.hpp"
 
 using ptz::control::LoopParams;
 

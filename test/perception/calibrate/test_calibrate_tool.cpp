@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "ptz/rig.hpp"
+#include "common/rig.hpp"
 #include "support/board_views.hpp"
 #include "support/data_dir.hpp"
 

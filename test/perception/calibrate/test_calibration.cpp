@@ -6,8 +6,8 @@
 #include <fstream>
 #include <random>
 
-#include "perception/calibration.hpp"
-#include "perception/calibration_files.hpp"
+#include "perception/calibrate/calibration.hpp"
+#include "perception/calibrate/calibration_files.hpp"
 #include "support/board_views.hpp"
 #include "support/data_dir.hpp"
 

@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "perception/calibration_live.hpp"
+#include "perception/calibrate/calibration_live.hpp"
 #include "support/board_views.hpp"
 
 namespace {

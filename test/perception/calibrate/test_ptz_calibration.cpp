@@ -4,8 +4,8 @@
 
 #include <random>
 
-#include "perception/ptz_calibration.hpp"
-#include "perception/stereo.hpp"
+#include "perception/calibrate/ptz_calibration.hpp"
+#include "perception/detect/stereo.hpp"
 #include "support/board_views.hpp"
 
 namespace {

@@ -10,9 +10,9 @@
 #include <random>
 #include <sstream>
 
-#include "perception/cloud.hpp"
-#include "perception/depth.hpp"
-#include "perception/stereo_eval.hpp"
+#include "perception/depth/cloud.hpp"
+#include "perception/depth/depth.hpp"
+#include "perception/depth_eval/stereo_eval.hpp"
 #include "support/data_dir.hpp"
 
 using ptz::PtzPose;

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <limits>
 
-#include "perception/cloud.hpp"
-#include "perception/depth.hpp"
+#include "perception/depth/cloud.hpp"
+#include "perception/depth/depth.hpp"
 #include "sim/renderer.hpp"
 
 using ptz::PtzPose;

@@ -7,8 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "perception/detector.hpp"
-#include "perception/stereo.hpp"
+#include "perception/detect/detector.hpp"
+#include "perception/detect/stereo.hpp"
 #include "sim/simulator.hpp"
 #include "support/data_dir.hpp"
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "ptz_driver/stereo_camera.hpp"
+#include "ptz_driver/cameras/stereo_camera.hpp"
 #include "support/fake_frame_source.hpp"
 
 using namespace ptz::driver;

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "ptz_driver/stereo_pairer.hpp"
+#include "ptz_driver/cameras/stereo_pairer.hpp"
 
 using ptz::Side;
 using ptz::driver::CapturedFrame;

@@ -2,7 +2,7 @@
 // known answers, the nearest state outside the history, stale beyond the extrapolation limit.
 #include <gtest/gtest.h>
 
-#include "ptz_driver/ptz_history.hpp"
+#include "ptz_driver/cameras/ptz_history.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;

@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "ptz/config.hpp"
-#include "ptz/measure.hpp"
-#include "ptz_driver/capture_source.hpp"
-#include "ptz_driver/stereo_camera.hpp"
+#include "common/config.hpp"
+#include "common/measure.hpp"
+#include "ptz_driver/cameras/sources/capture_source.hpp"
+#include "ptz_driver/cameras/stereo_camera.hpp"
 
 using namespace ptz::driver;
 

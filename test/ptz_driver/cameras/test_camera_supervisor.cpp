@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "ptz_driver/source_supervisor.hpp"
+#include "ptz_driver/cameras/sources/source_supervisor.hpp"
 #include "support/fake_frame_source.hpp"
 
 using ptz::driver::CapturedFrame;

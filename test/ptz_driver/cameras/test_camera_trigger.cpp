@@ -9,10 +9,10 @@
 #include <map>
 #include <random>
 
-#include "ptz_driver/capture_source.hpp"
-#include "ptz_driver/gpio_fake.hpp"
-#include "ptz_driver/stereo_camera.hpp"
-#include "ptz_driver/trigger.hpp"
+#include "ptz_driver/cameras/sources/capture_source.hpp"
+#include "ptz_driver/cameras/stereo_camera.hpp"
+#include "ptz_driver/cameras/trigger.hpp"
+#include "ptz_driver/emulators/emulated_gpio_chip.hpp"
 #include "support/fake_frame_source.hpp"
 
 using namespace ptz::driver;
@@ -53,7 +53,7 @@ TriggerParams trigger(bool active_low = false) {
 
 struct Pulsing {
   SimClock sim;
-  FakeGpio chip{{}, 100.0, 1e-4};
+  EmulatedGpioChip chip{{}, 100.0, 1e-4};
   TriggerLog log;
   std::unique_ptr<TriggerPulser> pulser;
   explicit Pulsing(const TriggerParams& t) {
@@ -84,7 +84,7 @@ TEST(CameraTrigger, PulsesComeAtTheRateWithTheirWidthAndEachIsLogged) {
   Pulsing p(trigger());
   EXPECT_FALSE(p.chip.level(kLine));
   p.pulser->run(30);
-  const FakeGpio::OutputTally tally = p.chip.tally(kLine);
+  const EmulatedGpioChip::OutputTally tally = p.chip.tally(kLine);
   EXPECT_EQ(tally.rising, 30);
   EXPECT_NEAR(tally.high_s, 30 * 0.002, 2e-4);  // the chip's 0.1 ms steps
   EXPECT_FALSE(p.chip.level(kLine));
@@ -106,7 +106,7 @@ TEST(CameraTrigger, ActiveLowIdlesHighAndPulsesLow) {
   EXPECT_TRUE(p.chip.level(kLine));  // inactive from the request on: no edge before the first
   EXPECT_EQ(p.chip.tally(kLine).rising, 0);
   p.pulser->run(10);
-  const FakeGpio::OutputTally tally = p.chip.tally(kLine);
+  const EmulatedGpioChip::OutputTally tally = p.chip.tally(kLine);
   // Low 2 ms of each 33.3 ms period; the last period ends 2 ms after its pulse.
   EXPECT_NEAR(tally.at_s - 100.0 - tally.high_s, 10 * 0.002, 2e-4);
   EXPECT_TRUE(p.chip.level(kLine));

@@ -5,10 +5,11 @@
 #include <cmath>
 #include <random>
 
-#include "ptz/config.hpp"
-#include "ptz_driver/pelco_d.hpp"
-#include "ptz_driver/visca.hpp"
-#include "ptz_driver/visca_camera.hpp"
+#include "common/config.hpp"
+#include "ptz_driver/emulators/visca_camera_emulator.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"
+#include "ptz_driver/heads/visca/visca_model.hpp"
 
 using ptz::driver::Bytes;
 namespace visca = ptz::driver::visca;

@@ -4,12 +4,12 @@
 // port.
 #include <gtest/gtest.h>
 
-#include "ptz/plant.hpp"
-#include "ptz_driver/backoff.hpp"
-#include "ptz_driver/head_book.hpp"
-#include "ptz_driver/head_factory.hpp"
-#include "ptz_driver/serial_line.hpp"
-#include "ptz_driver/serial_port.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/head_factory.hpp"
+#include "ptz_driver/heads/serial_line.hpp"
+#include "ptz_driver/io/backoff.hpp"
+#include "ptz_driver/io/serial_port.hpp"
 #include "support/pty_pair.hpp"
 
 using ptz::driver::Bytes;
@@ -31,7 +31,7 @@ std::string errorOf(const std::function<void()>& f) {
 
 ptz::Params driverParams() {
   ptz::Params p("test", "");
-  ptz::addPlantParams(p);
+  ptz::addAxisLimitParams(p);
   ptz::driver::declareBackendParams(p);
   return p;
 }

@@ -16,7 +16,7 @@
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
-#include "tools/report.hpp"
+#include "tools/report/report.hpp"
 
 namespace {
 

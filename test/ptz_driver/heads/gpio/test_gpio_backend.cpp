@@ -7,9 +7,10 @@
 #include <chrono>
 #include <cstdio>
 
-#include "ptz/plant.hpp"
-#include "ptz_driver/gpio_factory.hpp"
-#include "ptz_driver/head_factory.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/emulators/emulated_gpio_heads.hpp"
+#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/head_factory.hpp"
 #include "support/child_process.hpp"
 #include "support/gpio_rig.hpp"
 
@@ -20,7 +21,7 @@ using namespace ptz::driver;
 namespace {
 
 void declare(ptz::Params& p) {
-  ptz::addPlantParams(p);
+  ptz::addAxisLimitParams(p);
   declareBackendParams(p);
   p.set("backend", "gpio");
 }
@@ -91,7 +92,7 @@ TEST(GpioBackend, TheSimulatedAxesHomeAtTheConfiguredSwitches) {
   ptz::Params p("test", "test");
   declare(p);
   const GpioHeadConfig config = gpioHeadConfig(p, "left");
-  const std::vector<FakeAxisSpec> axes = simulatedAxes(config);
+  const std::vector<EmulatedAxisSpec> axes = simulatedAxes(config);
   ASSERT_EQ(axes.size(), 2u);
   ptz::test::GpioRig rig(config, axes[0], axes[1]);  // stepped: positions known at each step
   rig.head->start(0);
@@ -112,7 +113,7 @@ TEST(GpioBackend, BothHeadsHomeInRealTimeOnTheSimulatedChip) {
   ptz::Params p("test", "test");
   declare(p);
   p.set("gpio_chip", "sim");
-  auto heads = makeHeads(p);
+  auto heads = makeHeads(p, openGpioChipOrEmulator);
   for (auto& h : heads) h->start(0);
   // Looked at after each step of the left head's thread (both step every millisecond).
   const auto& left = dynamic_cast<const GpioHead&>(*heads[0]);
@@ -141,9 +142,9 @@ TEST(GpioBackend, BothHeadsHomeInRealTimeOnTheSimulatedChip) {
 TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
   auto c = ptz::test::GpioRig::config();
   c.pan.max_duty = c.tilt.max_duty = 0.3;
-  auto fake = std::make_unique<FakeGpio>(std::vector<FakeAxisSpec>{
+  auto fake = std::make_unique<EmulatedGpioChip>(std::vector<EmulatedAxisSpec>{
       ptz::test::fakeAxis(c.pan, -1.0), ptz::test::fakeAxis(c.tilt, -1.0)});
-  FakeGpio* chip = fake.get();
+  EmulatedGpioChip* chip = fake.get();
   chip->useClock(gpioClockS);
   GpioHead head(c, std::move(fake), true);
   head.start(0);
@@ -152,9 +153,9 @@ TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
   // Saturated at duty 0.3 (1.2 rad/s) all the way: measure between -0.9 and -0.3 rad.
   ASSERT_TRUE(head.waitForStep([&] { return chip->positionRad(0) > -0.9; }, 3));
   head.takeWakeLatenessS();
-  const FakeGpio::OutputTally from = chip->tally(1);
+  const EmulatedGpioChip::OutputTally from = chip->tally(1);
   ASSERT_TRUE(head.waitForStep([&] { return chip->positionRad(0) > -0.3; }, 3));
-  const FakeGpio::OutputTally to = chip->tally(1);
+  const EmulatedGpioChip::OutputTally to = chip->tally(1);
   std::vector<double> late_s = head.takeWakeLatenessS();
   std::sort(late_s.begin(), late_s.end());
   const double window_s = to.at_s - from.at_s;

@@ -6,12 +6,12 @@
 
 #include <cmath>
 
-#include "ptz_driver/gpio_event_merger.hpp"
-#include "ptz_driver/gpio_fake.hpp"
-#include "ptz_driver/quadrature.hpp"
+#include "ptz_driver/emulators/emulated_gpio_chip.hpp"
+#include "ptz_driver/heads/gpio/quadrature.hpp"
+#include "ptz_driver/io/gpio_event_merger.hpp"
 
-using ptz::driver::FakeAxisSpec;
-using ptz::driver::FakeGpio;
+using ptz::driver::EmulatedAxisSpec;
+using ptz::driver::EmulatedGpioChip;
 using ptz::driver::GpioEventMerger;
 using ptz::driver::LineEvent;
 using ptz::driver::QuadratureDecoder;
@@ -65,8 +65,8 @@ struct OpenLoop {
     for (int line = 2; line <= 5; ++line) chip.requestEvents(line, ptz::driver::Bias::kAsIs, "in");
     decoder.reset(chip.get(2), chip.get(3));
   }
-  static FakeAxisSpec spec() {
-    FakeAxisSpec s;
+  static EmulatedAxisSpec spec() {
+    EmulatedAxisSpec s;
     s.lines = {0, -1, 1, 2, 3, 4, 5};
     s.counts_per_rad = 1000;
     s.max_speed_rad_s = 4;
@@ -93,7 +93,7 @@ struct OpenLoop {
       }
     }
   }
-  FakeGpio chip;
+  EmulatedGpioChip chip;
   QuadratureDecoder decoder;
   std::vector<LineEvent> events;
   double t_s = 0, last_s = 0;

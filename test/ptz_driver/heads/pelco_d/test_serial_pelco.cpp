@@ -9,10 +9,10 @@
 #include <fstream>
 #include <iterator>
 
-#include "ptz/config.hpp"
-#include "ptz/plant.hpp"
-#include "ptz_driver/pelco_d_emulator.hpp"
-#include "ptz_driver/pelco_d_head.hpp"
+#include "common/config.hpp"
+#include "common/plant.hpp"
+#include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
 #include "support/half_duplex_bus.hpp"
 #include "support/pty_pair.hpp"
 #include "support/serial_serve.hpp"
