@@ -177,9 +177,8 @@ PtzPlant::Params plantParamsFrom(const Params& params) {
     ax.time_constant_s = params.getDouble(a + "_time_constant_s");
     ax.dead_time_s = params.getDouble("dead_time_s");
     if (!(ax.time_constant_s > 0) || ax.dead_time_s < 0) {
-      throw ConfigError("plant parameters of the " + a +
-                        " axis: need time_constant_s > 0, min < max, max_rate > 0, "
-                        "dead_time_s >= 0");
+      throw ConfigError("plant parameters of the " + a + " axis: need " + a +
+                        "_time_constant_s > 0, dead_time_s >= 0");
     }
   }
   return p;

@@ -11,7 +11,6 @@
 #include <mutex>
 #include <vector>
 
-#include "ptz_driver/heads/gpio/gpio_axis.hpp"  // AxisLines
 #include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {

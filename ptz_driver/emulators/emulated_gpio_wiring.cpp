@@ -1,10 +1,10 @@
-#include "ptz_driver/emulators/emulated_gpio_heads.hpp"
+#include "ptz_driver/emulators/emulated_gpio_wiring.hpp"
 
-#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/gpio/gpio_backend.hpp"
 
 namespace ptz::driver {
 
-std::vector<EmulatedAxisSpec> simulatedAxes(const GpioHeadConfig& head) {
+std::vector<EmulatedAxisSpec> emulatedAxes(const GpioHeadConfig& head) {
   std::vector<EmulatedAxisSpec> axes;
   for (const AxisConfig* c : {&head.pan, &head.tilt}) {
     EmulatedAxisSpec s;
@@ -20,15 +20,15 @@ std::vector<EmulatedAxisSpec> simulatedAxes(const GpioHeadConfig& head) {
   return axes;
 }
 
-std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head) {
-  auto chip = std::make_unique<EmulatedGpioChip>(simulatedAxes(head));
+std::unique_ptr<GpioLines> emulatedChip(const GpioHeadConfig& head) {
+  auto chip = std::make_unique<EmulatedGpioChip>(emulatedAxes(head));
   chip->useClock(gpioClockS);
   return chip;
 }
 
-std::unique_ptr<GpioLines> openGpioChipOrEmulator(const std::string& chip,
-                                                  const GpioHeadConfig& head) {
-  return chip == "sim" ? simulatedChip(head) : openGpioChip(chip, head);
+std::unique_ptr<GpioLines> openHeadLinesOrEmulated(const std::string& chip,
+                                                   const GpioHeadConfig& head) {
+  return chip == "sim" ? emulatedChip(head) : openHeadLines(chip, head);
 }
 
 }  // namespace ptz::driver

@@ -13,11 +13,11 @@ namespace ptz::driver {
 
 // The simulated axes a configuration is wired to: switches where configured, end stops 0.05 rad
 // beyond them, each axis 0.3 rad inside its min switch at power-up.
-std::vector<EmulatedAxisSpec> simulatedAxes(const GpioHeadConfig& head);
+std::vector<EmulatedAxisSpec> emulatedAxes(const GpioHeadConfig& head);
 // A simulated chip of those axes on the real-time clock (gpioClockS()).
-std::unique_ptr<GpioLines> simulatedChip(const GpioHeadConfig& head);
+std::unique_ptr<GpioLines> emulatedChip(const GpioHeadConfig& head);
 // For ptz-driver's gpio backend: the emulated chip for "sim", else the real chip.
-std::unique_ptr<GpioLines> openGpioChipOrEmulator(const std::string& chip,
-                                                  const GpioHeadConfig& head);
+std::unique_ptr<GpioLines> openHeadLinesOrEmulated(const std::string& chip,
+                                                   const GpioHeadConfig& head);
 
 }  // namespace ptz::driver

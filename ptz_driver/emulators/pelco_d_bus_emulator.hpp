@@ -11,7 +11,7 @@
 
 #include "ptz_driver/emulators/emulated_motors.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_model.hpp"
-#include "ptz_driver/heads/visca/visca.hpp"  // Bytes
+#include "ptz_driver/io/bytes.hpp"
 
 namespace ptz::driver {
 

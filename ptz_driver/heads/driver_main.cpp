@@ -13,7 +13,7 @@
 
 #include "common/plant.hpp"
 #include "common/transport.hpp"
-#include "ptz_driver/emulators/emulated_gpio_heads.hpp"  // gpio_chip "sim"
+#include "ptz_driver/emulators/emulated_gpio_wiring.hpp"  // gpio_chip "sim"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "ptz_driver/heads/heads_stop.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
@@ -50,7 +50,7 @@ class DriverNode {
         max_setpoint_rate_(p.getDouble("max_setpoint_rate")),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)) {
-    heads_ = makeHeads(p, openGpioChipOrEmulator);
+    heads_ = makeHeads(p, openHeadLinesOrEmulated);
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, ch_setpoint_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },

@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "common/plant.hpp"
-#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/gpio/gpio_backend.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
 #include "ptz_driver/heads/visca/visca_ip_head.hpp"
 #include "ptz_driver/heads/visca/visca_serial_head.hpp"

@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "common/config.hpp"
-#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/gpio/gpio_backend.hpp"
 #include "ptz_driver/heads/head.hpp"
 
 namespace ptz::driver {
@@ -15,6 +15,6 @@ void declareBackendParams(Params& p);
 // Throws ConfigError naming the parameter (or file and field) that is wrong. GPIO heads get their
 // lines from open_gpio.
 std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
-                                                  const GpioChipOpener& open_gpio = openGpioChip);
+                                                  const GpioChipOpener& open_gpio = openHeadLines);
 
 }  // namespace ptz::driver

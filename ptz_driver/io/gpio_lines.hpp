@@ -22,6 +22,13 @@ double gpioClockS();
 // Sleeps until t_s on that clock (to the deadline, not for a while: periods do not drift).
 void gpioSleepUntilS(double t_s);
 
+// The lines of one DC-motor axis: the bridge's, the encoder's and the limit switches' (-1: none).
+struct AxisLines {
+  int dir = -1, dir2 = -1, enable = -1;  // dir2: -1 for a DIR/PWM (PH/EN) bridge
+  int encoder_a = -1, encoder_b = -1;
+  int limit_min = -1, limit_max = -1;  // closed = low (switch to ground, pull-up)
+};
+
 enum class Bias { kAsIs, kPullUp, kDisabled };
 
 class GpioLines {

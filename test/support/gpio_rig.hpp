@@ -36,7 +36,7 @@ inline driver::AxisConfig testAxis(const std::string& name, int base) {
 
 // The motor behind an axis: 4 rad/s at full drive, time constant 50 ms, switches where the axis
 // expects them, end stops 0.1 rad beyond.
-inline driver::EmulatedAxisSpec fakeAxis(const driver::AxisConfig& c, double start_rad) {
+inline driver::EmulatedAxisSpec emulatedAxis(const driver::AxisConfig& c, double start_rad) {
   driver::EmulatedAxisSpec s;
   s.lines = c.lines;
   s.counts_per_rad = c.counts_per_rad;

@@ -51,7 +51,7 @@ TEST(GpioDriver, FollowsSetpointsHoldsAndStopsOnTheSimulatedChip) {
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return l.states > 0; }, 10s));
   // Homed at the switch (-0.7) and on the way back to 0: where exactly depends on when the
-  // first state came (ptz_driver_tests has the exact numbers, stepped).
+  // first state came (ptz_heads_tests has the exact numbers, stepped).
   for (const auto& head : {l.last.left, l.last.right}) {
     EXPECT_GE(head.tilt_rad, -0.7 - 0.01);
     EXPECT_LE(head.tilt_rad, 0.003);

@@ -23,9 +23,9 @@ int main(int argc, char** argv) {
   p.add("out", "still", "output file prefix");
   // A ptz-sim config file reads as it is; what only moves or streams does not make a still.
   for (const char* ignored : {"clock", "encoding"}) p.add(ignored, "", "ignored (ptz-sim's)");
-  for (const char* ignored : {"frame_rate_hz", "dead_time_s", "plant_step_s", "pan_gain",
-                              "pan_time_constant_s", "tilt_gain", "tilt_time_constant_s",
-                              "zoom_gain", "zoom_time_constant_s"}) {
+  for (const char* ignored :
+       {"frame_rate_hz", "dead_time_s", "plant_step_s", "pan_gain", "pan_time_constant_s",
+        "tilt_gain", "tilt_time_constant_s", "zoom_gain", "zoom_time_constant_s"}) {
     p.add(ignored, 0.0, "", "ignored (ptz-sim's motor model and rate)");
   }
   p.addSection("scene", "as ptz-sim");

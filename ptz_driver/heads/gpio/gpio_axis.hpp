@@ -14,12 +14,6 @@
 
 namespace ptz::driver {
 
-struct AxisLines {
-  int dir = -1, dir2 = -1, enable = -1;  // dir2: -1 for a DIR/PWM (PH/EN) bridge
-  int encoder_a = -1, encoder_b = -1;
-  int limit_min = -1, limit_max = -1;  // closed = low (switch to ground, pull-up)
-};
-
 struct AxisConfig {
   std::string name = "pan";       // errors name it ("left pan")
   std::string param_prefix = "";  // the parameters of its lines ("left_pan_")

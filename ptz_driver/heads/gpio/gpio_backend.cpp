@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/heads/gpio/gpio_backend.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -165,7 +165,7 @@ std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(const Params& p,
   return heads;
 }
 
-std::unique_ptr<GpioLines> openGpioChip(const std::string& chip, const GpioHeadConfig&) {
+std::unique_ptr<GpioLines> openHeadLines(const std::string& chip, const GpioHeadConfig&) {
   return openGpiodChip(chip, "ptz-driver");
 }
 

@@ -1,6 +1,6 @@
 // The parameters of the GPIO DC-motor backend (`--backend gpio`) and the two heads built from
 // them. Every line offset, gain and limit is a parameter; the defaults are the Raspberry Pi 4
-// wiring of ptz_driver/heads/gpio/README.md.
+// wiring in the main README ("Running on hardware").
 #pragma once
 
 #include <array>
@@ -22,9 +22,9 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side);
 using GpioChipOpener =
     std::function<std::unique_ptr<GpioLines>(const std::string& chip, const GpioHeadConfig& head)>;
 // A real chip through libgpiod.
-std::unique_ptr<GpioLines> openGpioChip(const std::string& chip, const GpioHeadConfig& head);
+std::unique_ptr<GpioLines> openHeadLines(const std::string& chip, const GpioHeadConfig& head);
 // Both heads, each on the lines open_chip gives it.
 std::array<std::unique_ptr<PtzHead>, 2> makeGpioHeads(
-    const Params& p, const GpioChipOpener& open_chip = openGpioChip);
+    const Params& p, const GpioChipOpener& open_chip = openHeadLines);
 
 }  // namespace ptz::driver

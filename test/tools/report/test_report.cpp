@@ -55,7 +55,9 @@ double jsonNumber(const std::string& json, const std::string& key) {
 }
 
 int runReport(const std::string& args, std::string* output) {
-  const std::string out = tempPath("report_output.txt");
+  // One file per test: ctest runs the tests of this suite side by side.
+  const std::string out = tempPath(
+      std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".output.txt");
   const int status = std::system((PTZ_REPORT_BIN " " + args + " > " + out + " 2>&1").c_str());
   *output = readAll(out);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;

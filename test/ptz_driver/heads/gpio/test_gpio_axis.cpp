@@ -11,7 +11,7 @@
 
 using ptz::PtzPose;
 using ptz::driver::GpioAxis;
-using ptz::test::fakeAxis;
+using ptz::test::emulatedAxis;
 using ptz::test::GpioRig;
 
 namespace {
@@ -22,7 +22,7 @@ constexpr int kPanDir = 0, kPanEnable = 1, kPanMin = 4, kPanMax = 5;
 // A head homed and settled at 0 (pan starts 0.4 rad inside its min switch, tilt 0.2).
 GpioRig homedRig() {
   const auto c = GpioRig::config();
-  GpioRig rig(c, fakeAxis(c.pan, -0.7), fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, emulatedAxis(c.pan, -0.7), emulatedAxis(c.tilt, -0.9));
   rig.head->start(0);
   EXPECT_TRUE(rig.run(10, [&] {
     return rig.head->measured() && std::abs(rig.chip->positionRad(0)) < 3 * kCount &&
@@ -36,7 +36,7 @@ GpioRig homedRig() {
 
 TEST(GpioAxis, HomingSetsTheZeroAtTheSwitchThenGoesToZero) {
   const auto c = GpioRig::config();
-  GpioRig rig(c, fakeAxis(c.pan, -0.7), fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, emulatedAxis(c.pan, -0.7), emulatedAxis(c.tilt, -0.9));
   EXPECT_FALSE(rig.head->measured());  // where it is is unknown until homed
   rig.head->start(0);
   ASSERT_TRUE(rig.run(5, [&] { return rig.head->measured().has_value(); }));
@@ -61,7 +61,7 @@ TEST(GpioAxis, HomingSetsTheZeroAtTheSwitchThenGoesToZero) {
 
 TEST(GpioAxis, HomingStartingOnTheSwitchBacksOffFirst) {
   const auto c = GpioRig::config();
-  GpioRig rig(c, fakeAxis(c.pan, -1.15), fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, emulatedAxis(c.pan, -1.15), emulatedAxis(c.tilt, -0.9));
   ASSERT_FALSE(rig.chip->level(kPanMin));  // closed
   rig.head->start(0);
   ASSERT_TRUE(rig.run(5, [&] { return rig.head->measured().has_value(); }));
@@ -72,7 +72,7 @@ TEST(GpioAxis, HomingStartingOnTheSwitchBacksOffFirst) {
 
 TEST(GpioAxis, HomingStartingOnTheMaxSwitchSeeksTowardMin) {
   const auto c = GpioRig::config();
-  GpioRig rig(c, fakeAxis(c.pan, 1.15), fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, emulatedAxis(c.pan, 1.15), emulatedAxis(c.tilt, -0.9));
   ASSERT_FALSE(rig.chip->level(kPanMax));  // closed: the axis coasted onto it, or was pushed
   rig.head->start(0);
   // 2.25 rad to the min switch at 0.3 rad/s: 7.5 s (and the loop's lag, under 0.1 rad).
@@ -106,11 +106,11 @@ TEST(GpioAxis, AMotorTurningTheWrongWayIsNamedWhateverTheSwitchItStartsOn) {
   };
   for (const Case& k : cases) {
     SCOPED_TRACE(k.what);
-    auto pan = fakeAxis(c.pan, k.start_rad);
+    auto pan = emulatedAxis(c.pan, k.start_rad);
     pan.reversed = true;
     if (k.swap_encoder) std::swap(pan.lines.encoder_a, pan.lines.encoder_b);
     pan.max_stop_rad = k.max_stop_rad;
-    GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+    GpioRig rig(c, pan, emulatedAxis(c.tilt, -0.9));
     rig.head->start(0);
     ASSERT_TRUE(rig.run(10, [&] { return rig.head->state(0) == GpioAxis::State::kFault; }));
     const std::string said = rig.head->stats().last_error;
@@ -122,9 +122,9 @@ TEST(GpioAxis, AMotorTurningTheWrongWayIsNamedWhateverTheSwitchItStartsOn) {
 
 TEST(GpioAxis, AMaxSwitchStuckClosedIsNamedWhenTheMinSwitchCloses) {
   const auto c = GpioRig::config();
-  auto pan = fakeAxis(c.pan, 0);
+  auto pan = emulatedAxis(c.pan, 0);
   pan.max_switch_rad = -10;  // reads closed everywhere (a shorted wire)
-  GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, pan, emulatedAxis(c.tilt, -0.9));
   rig.head->start(0);
   ASSERT_TRUE(rig.run(6, [&] { return rig.head->state(0) == GpioAxis::State::kFault; }));
   EXPECT_NE(rig.head->stats().last_error.find("both limit switches read closed"), std::string::npos)
@@ -135,10 +135,10 @@ TEST(GpioAxis, AMaxSwitchStuckClosedIsNamedWhenTheMinSwitchCloses) {
 TEST(GpioAxis, HomingTimeoutIsAnErrorNamingTheAxis) {
   auto c = GpioRig::config();
   c.pan.homing_timeout_s = 2;
-  auto pan = fakeAxis(c.pan, 0);
+  auto pan = emulatedAxis(c.pan, 0);
   pan.min_switch_rad = -50;  // never reached in 2 s
   pan.min_stop_rad = -60;
-  GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, pan, emulatedAxis(c.tilt, -0.9));
   rig.head->start(0);
   rig.run(2.5);
   EXPECT_EQ(rig.head->state(0), GpioAxis::State::kFault);
@@ -155,7 +155,7 @@ TEST(GpioAxis, HomingTimeoutIsAnErrorNamingTheAxis) {
 
 TEST(GpioAxis, AStopDuringHomingInterruptsItAndSaysSo) {
   const auto c = GpioRig::config();
-  GpioRig rig(c, fakeAxis(c.pan, -0.7), fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, emulatedAxis(c.pan, -0.7), emulatedAxis(c.tilt, -0.9));
   rig.head->start(0);
   rig.run(0.5);
   rig.head->stop(rig.t_s, 0.1);
@@ -172,9 +172,9 @@ TEST(GpioAxis, AStopDuringHomingInterruptsItAndSaysSo) {
 
 TEST(GpioAxis, AnEncoderCountingTheWrongWayFailsHoming) {
   auto c = GpioRig::config();
-  auto pan = fakeAxis(c.pan, -0.5);
+  auto pan = emulatedAxis(c.pan, -0.5);
   std::swap(pan.lines.encoder_a, pan.lines.encoder_b);  // A and B wired the other way round
-  GpioRig rig(c, pan, fakeAxis(c.tilt, -0.9));
+  GpioRig rig(c, pan, emulatedAxis(c.tilt, -0.9));
   rig.head->start(0);
   rig.run(3);
   EXPECT_EQ(rig.head->state(0), GpioAxis::State::kFault);

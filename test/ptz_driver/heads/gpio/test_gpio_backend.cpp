@@ -8,8 +8,8 @@
 #include <cstdio>
 
 #include "common/plant.hpp"
-#include "ptz_driver/emulators/emulated_gpio_heads.hpp"
-#include "ptz_driver/heads/gpio/gpio_factory.hpp"
+#include "ptz_driver/emulators/emulated_gpio_wiring.hpp"
+#include "ptz_driver/heads/gpio/gpio_backend.hpp"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "support/child_process.hpp"
 #include "support/gpio_rig.hpp"
@@ -92,7 +92,7 @@ TEST(GpioBackend, TheSimulatedAxesHomeAtTheConfiguredSwitches) {
   ptz::Params p("test", "test");
   declare(p);
   const GpioHeadConfig config = gpioHeadConfig(p, "left");
-  const std::vector<EmulatedAxisSpec> axes = simulatedAxes(config);
+  const std::vector<EmulatedAxisSpec> axes = emulatedAxes(config);
   ASSERT_EQ(axes.size(), 2u);
   ptz::test::GpioRig rig(config, axes[0], axes[1]);  // stepped: positions known at each step
   rig.head->start(0);
@@ -113,7 +113,7 @@ TEST(GpioBackend, BothHeadsHomeInRealTimeOnTheSimulatedChip) {
   ptz::Params p("test", "test");
   declare(p);
   p.set("gpio_chip", "sim");
-  auto heads = makeHeads(p, openGpioChipOrEmulator);
+  auto heads = makeHeads(p, openHeadLinesOrEmulated);
   for (auto& h : heads) h->start(0);
   // Looked at after each step of the left head's thread (both step every millisecond).
   const auto& left = dynamic_cast<const GpioHead&>(*heads[0]);
@@ -143,7 +143,7 @@ TEST(GpioBackend, ControlThreadPwmAndItsTiming) {
   auto c = ptz::test::GpioRig::config();
   c.pan.max_duty = c.tilt.max_duty = 0.3;
   auto fake = std::make_unique<EmulatedGpioChip>(std::vector<EmulatedAxisSpec>{
-      ptz::test::fakeAxis(c.pan, -1.0), ptz::test::fakeAxis(c.tilt, -1.0)});
+      ptz::test::emulatedAxis(c.pan, -1.0), ptz::test::emulatedAxis(c.tilt, -1.0)});
   EmulatedGpioChip* chip = fake.get();
   chip->useClock(gpioClockS);
   GpioHead head(c, std::move(fake), true);
