@@ -111,6 +111,13 @@ std::vector<double> GpioHead::takeWakeLatenessS() {
   return out;
 }
 
+std::vector<double> GpioHead::takeEdgeErrorBoundsS() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<double> out;
+  out.swap(edge_error_bound_s_);
+  return out;
+}
+
 // Sleeps until each step is due, minus the median lateness of a wake-up (learnt as it goes: a
 // microsecond up when late, down when early, so that stalls do not pull it), so that PWM edges
 // land on time as often late as early; a step woken early runs for the time it was due.
@@ -130,9 +137,13 @@ void GpioHead::run() {
     const double now_s = gpioClockS();
     lead_s = std::clamp(lead_s + (now_s > due_s ? 1e-6 : -1e-6), 0.0, max_lead_s);
     const double next_s = step(std::max(now_s, due_s));
+    const double done_s = gpioClockS();
     {
       std::lock_guard<std::mutex> lock(mutex_);
-      if (lateness_s_.size() < kMaxLatenessSamples) lateness_s_.push_back(now_s - due_s);
+      if (lateness_s_.size() < kMaxLatenessSamples) {
+        lateness_s_.push_back(now_s - due_s);
+        edge_error_bound_s_.push_back(std::max({done_s - due_s, due_s - now_s, 0.0}));
+      }
     }
     {
       std::lock_guard<std::mutex> lock(step_mutex_);  // a waiter between look and wait hears it

@@ -57,6 +57,10 @@ class GpioHead : public PtzHead {
   // How late (< 0: early) each step of the control thread ran against when it was due: the
   // jitter of the PWM edges. Since the last call.
   std::vector<double> takeWakeLatenessS();
+  // How far the line writes of each step of the control thread may lie from when they were due:
+  // written between its wake-up and its end, so late by at most end - due, or early by at most
+  // due - wake-up. The bound on each PWM edge's error. Since the last call.
+  std::vector<double> takeEdgeErrorBoundsS();
   // Threaded: blocks until done() holds, looking again after each step of the control thread
   // (the only thing that moves the head), at most timeout_s; returns done().
   bool waitForStep(const std::function<bool()>& done, double timeout_s) const;
@@ -73,6 +77,7 @@ class GpioHead : public PtzHead {
   double measured_at_s_ = 0;
   int64_t foreign_events_ = 0;
   std::vector<double> lateness_s_;
+  std::vector<double> edge_error_bound_s_;
   HeadStats stats_;
   bool threaded_;
   std::atomic<bool> quit_{false};

@@ -8,24 +8,17 @@
 #include "ptz_driver/heads/serial_line.hpp"
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
+#include "support/error_of.hpp"
 #include "support/pty_pair.hpp"
 
 using ptz::driver::Bytes;
 using ptz::driver::SerialPort;
+using ptz::test::errorOf;
 using ptz::test::PtyPair;
 using namespace std::chrono_literals;
 
 namespace {
 const std::string kConfig = PTZ_SOURCE_DIR "/config/";
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
 
 ptz::Params driverParams() {
   ptz::Params p("test", "");

@@ -2,29 +2,18 @@
 // the device and the parameter, and the back-off schedule of what reopens.
 #include <gtest/gtest.h>
 
-#include <functional>
-
 #include "common/config.hpp"
 #include "ptz_driver/heads/head_book.hpp"  // waitUntil
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
+#include "support/error_of.hpp"
 #include "support/pty_pair.hpp"
 
 using ptz::driver::Bytes;
 using ptz::driver::SerialPort;
+using ptz::test::errorOf;
 using ptz::test::PtyPair;
 using namespace std::chrono_literals;
-
-namespace {
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
-}  // namespace
 
 TEST(SerialPort, CarriesBytesBothWaysRaw) {
   PtyPair pty;
