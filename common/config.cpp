@@ -144,8 +144,12 @@ void Params::add(const std::string& name, const char* v, const std::string& help
   entries_[name] = {Type::kString, v, v, "", help};
 }
 void Params::addSection(const std::string& name, const std::string& help) {
-  if (!sections_.count(name)) section_order_.push_back(name);
-  sections_[name] = help;
+  if (!hasSection(name)) sections_.emplace_back(name, help);
+}
+
+bool Params::hasSection(const std::string& name) const {
+  return std::any_of(sections_.begin(), sections_.end(),
+                     [&](const auto& section) { return section.first == name; });
 }
 
 const Params::Entry& Params::entry(const std::string& name) const {
@@ -210,7 +214,7 @@ void Params::parseConfigFile(const std::string& path) {
   cv::FileNode root = config_.root();
   for (const auto& node : root) {
     const std::string key = node.name();
-    if (sections_.count(key)) continue;
+    if (hasSection(key)) continue;
     if (!entries_.count(normalise(key)) || key == "config") {
       throw ConfigError(where + ": unknown field '" + key + "' (see " + program_ + " --help)");
     }
@@ -293,8 +297,8 @@ std::string Params::usage() const {
     if (!e.default_value.empty()) s << " (default " << e.default_value << ")";
     s << "\n";
   }
-  for (const auto& name : section_order_) {
-    s << "  " << std::left << std::setw(35) << (name + ":") << " " << sections_.at(name)
+  for (const auto& [name, help] : sections_) {
+    s << "  " << std::left << std::setw(35) << (name + ":") << " " << help
       << " (config file only)\n";
   }
   return s.str();
@@ -314,8 +318,8 @@ std::string Params::markdownTable() const {
     s << "| `" << name << "` | " << e.unit << " | " << cell(e.default_value) << " | "
       << cell(e.help) << " |\n";
   }
-  for (const auto& name : section_order_) {
-    s << "| `" << name << ":` (section) |  |  | " << cell(sections_.at(name)) << " |\n";
+  for (const auto& [name, help] : sections_) {
+    s << "| `" << name << ":` (section) |  |  | " << cell(help) << " |\n";
   }
   return s.str();
 }

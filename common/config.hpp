@@ -7,6 +7,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ptz {
@@ -87,8 +88,8 @@ class Params {
   std::string summary_;
   std::vector<std::string> order_;
   std::map<std::string, Entry> entries_;
-  std::map<std::string, std::string> sections_;
-  std::vector<std::string> section_order_;  // as declared, for the tables
+  bool hasSection(const std::string& name) const;
+  std::vector<std::pair<std::string, std::string>> sections_;  // (name, help) as declared
   std::string config_path_;
   cv::FileStorage config_;
 };
