@@ -22,7 +22,7 @@ using ptz::bench::report;
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz_bench_depth", "Times ptz-depth's frame against the bare StereoBM.");
-  p.add("frames", 200, "", "frames to time");
+  p.add("frames", 200, "", "frames to time", ptz::Range::atLeast(1));
   ptz::perception::declareDepthParams(p);
   ptz::perception::declareCloudParams(p);
   if (!p.parse(argc, argv)) return 0;

@@ -127,13 +127,17 @@ void addAxisParams(Params& params, bool with_model) {
     const std::string a = kAxisNames[i];
     const std::string u = kAxisUnits[i];
     if (with_model) {
-      params.add(a + "_gain", d.axis[i].gain, "", a + " motor gain K");
+      params.add(a + "_gain", d.axis[i].gain, "", a + " motor gain K", Range::above(0));
       params.add(a + "_time_constant_s", d.axis[i].time_constant_s, "s",
-                 a + " motor time constant T");
+                 a + " motor time constant T", Range::above(0));
     }
-    params.add(a + "_min", d.axis[i].min_position, u, a + " lower limit");
-    params.add(a + "_max", d.axis[i].max_position, u, a + " upper limit");
-    params.add(a + "_max_rate", d.axis[i].max_rate_per_s, u + "/s", a + " rate limit");
+    // Pan and tilt within a turn either way (and a little); a zoom ratio is positive.
+    const Range position = i == PtzPlant::kZoom ? Range::above(0) : Range::between(-6.3, 6.3);
+    params.add(a + "_min", d.axis[i].min_position, u, a + " lower limit", position);
+    params.add(a + "_max", d.axis[i].max_position, u, a + " upper limit", position);
+    params.add(a + "_max_rate", d.axis[i].max_rate_per_s, u + "/s", a + " rate limit",
+               Range::above(0));
+    params.addOrder(a + "_min", a + "_max");
   }
 }
 
@@ -144,13 +148,16 @@ void addAxisLimitParams(Params& params) {
 }
 
 void addPlantParams(Params& params) {
-  params.add("dead_time_s", 0.0, "s", "dead time tau of every axis (image processing delay)");
+  params.add("dead_time_s", 0.0, "s", "dead time tau of every axis (image processing delay)",
+             Range::between(0, 60));
   params.add("plant_step_s", defaultPlantParams().step_s, "s",
-             "integration step of the motor model");
+             "integration step of the motor model", Range::above(0).andAtMost(1));
   addAxisParams(params, true);
 }
 
+// Ranges and orders are the declarations' (checked by Params as each value is read).
 PtzPlant::Params axisLimitsFrom(const Params& params) {
+  params.checkOrders();  // values set() after parsing
   PtzPlant::Params p = defaultPlantParams();
   for (int i = 0; i < 3; ++i) {
     const std::string a = kAxisNames[i];
@@ -158,10 +165,6 @@ PtzPlant::Params axisLimitsFrom(const Params& params) {
     ax.min_position = params.getDouble(a + "_min");
     ax.max_position = params.getDouble(a + "_max");
     ax.max_rate_per_s = params.getDouble(a + "_max_rate");
-    if (!(ax.min_position < ax.max_position) || !(ax.max_rate_per_s > 0)) {
-      throw ConfigError("limits of the " + a + " axis: need " + a + "_min < " + a + "_max, " + a +
-                        "_max_rate > 0");
-    }
   }
   return p;
 }
@@ -169,17 +172,12 @@ PtzPlant::Params axisLimitsFrom(const Params& params) {
 PtzPlant::Params plantParamsFrom(const Params& params) {
   PtzPlant::Params p = axisLimitsFrom(params);
   p.step_s = params.getDouble("plant_step_s");
-  if (!(p.step_s > 0)) throw ConfigError("parameter 'plant_step_s' must be > 0");
   for (int i = 0; i < 3; ++i) {
     const std::string a = kAxisNames[i];
     AxisParams& ax = p.axis[i];
     ax.gain = params.getDouble(a + "_gain");
     ax.time_constant_s = params.getDouble(a + "_time_constant_s");
     ax.dead_time_s = params.getDouble("dead_time_s");
-    if (!(ax.time_constant_s > 0) || ax.dead_time_s < 0) {
-      throw ConfigError("plant parameters of the " + a + " axis: need " + a +
-                        "_time_constant_s > 0, dead_time_s >= 0");
-    }
   }
   return p;
 }

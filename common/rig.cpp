@@ -98,6 +98,9 @@ StereoExtrinsics StereoRig::extrinsics(const PtzPose& lp, const PtzPose& rp) con
 
 namespace {
 
+// The largest image side a rig file may declare (a guard against absurd allocations).
+constexpr int kMaxImageSide = 16384;
+
 Intrinsics readIntrinsics(const cv::FileNode& node, const std::string& where) {
   cv::Mat K = readMatrix(node, "camera_matrix", 3, 3, where);
   cv::Mat D = readMatrix(node, "distortion_coefficients", 1, 5, where);
@@ -112,6 +115,7 @@ CameraSpec readCamera(const cv::FileNode& root, const std::string& side, int wid
                       const std::string& file_where) {
   const std::string where = file_where + ", " + side;
   cv::FileNode node = readNode(root, side, file_where);
+  checkFields(node, {"zoom_table", "optical_centre_from_pivot_m"}, where);
   CameraSpec spec;
   spec.width = width;
   spec.height = height;
@@ -122,8 +126,9 @@ CameraSpec readCamera(const cv::FileNode& root, const std::string& side, int wid
   int i = 0;
   for (const auto& item : table) {
     const std::string item_where = where + ".zoom_table[" + std::to_string(i++) + "]";
+    checkFields(item, {"zoom", "camera_matrix", "distortion_coefficients"}, item_where);
     ZoomEntry e;
-    e.zoom = readDouble(item, "zoom", item_where);
+    e.zoom = readDouble(item, "zoom", item_where, Range::above(0));
     e.intrinsics = readIntrinsics(item, item_where);
     if (!spec.zoom_table.empty() && e.zoom <= spec.zoom_table.back().zoom) {
       throw ConfigError(item_where + ": field 'zoom' must increase along the table");
@@ -155,13 +160,18 @@ void writeCamera(cv::FileStorage& fs, const CameraSpec& spec) {
 
 }  // namespace
 
+const std::vector<std::string> StereoRig::kRigReportFields = {
+    "E", "F", "R1", "R2", "P1", "P2", "Q", "calibration", "zoom_calibrations", "pivot_calibration"};
+
 StereoRig StereoRig::load(const std::string& path) {
   cv::FileStorage fs = openForRead(path, "rig file");
   const std::string where = "rig file '" + path + "'";
   cv::FileNode root = fs.root();
-  const int width = readInt(root, "image_width", where);
-  const int height = readInt(root, "image_height", where);
-  if (width <= 0 || height <= 0) throw ConfigError(where + ": image size must be positive");
+  std::vector<std::string> known = {"image_width", "image_height", "left", "right", "R", "T"};
+  known.insert(known.end(), kRigReportFields.begin(), kRigReportFields.end());
+  checkFields(root, known, where);
+  const int width = readInt(root, "image_width", where, Range::between(1, kMaxImageSide));
+  const int height = readInt(root, "image_height", where, Range::between(1, kMaxImageSide));
   StereoRig rig;
   rig.left = readCamera(root, "left", width, height, where);
   rig.right = readCamera(root, "right", width, height, where);

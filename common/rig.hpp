@@ -90,9 +90,12 @@ class StereoRig {
   StereoExtrinsics extrinsics(const PtzPose& left_pose, const PtzPose& right_pose) const;
   double baselineM() const { return home.T.norm(); }
 
-  // OpenCV FileStorage YAML; load() throws ConfigError naming the file and the field, and
-  // ignores fields it does not know (a calibration's report lives beside the rig's fields).
+  // OpenCV FileStorage YAML; load() throws ConfigError naming the file, the field and the value,
+  // and refuses fields it does not know (but for a calibration's report beside the rig's).
   static StereoRig load(const std::string& path);
+  // Top-level fields load() accepts beside the rig's own and does not read: ptz-calibrate's
+  // report (perception/calibrate/README.md). Any other field is refused.
+  static const std::vector<std::string> kRigReportFields;
   // extra_fields writes more top-level fields (ptz-calibrate's report) before the rig's own.
   void save(const std::string& path,
             const std::function<void(cv::FileStorage&)>& extra_fields = {}) const;

@@ -1,8 +1,12 @@
 #include "common/transport.hpp"
 
+#include "common/freshness.hpp"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <poll.h>
+#include <systemd/sd-daemon.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,7 +15,9 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
+#include <tuple>
 
 namespace ptz {
 
@@ -20,7 +26,8 @@ void addTransportParams(Params& params) {
              "LCM URL; empty: $LCM_DEFAULT_URL, else udpm://239.255.76.67:7667?ttl=0&recv_buf_size="
              "4194304");
   params.add("channel_prefix", "", "prefix of every channel name (e.g. SIM_)");
-  params.add("status_period_s", 1.0, "s", "period of the PROCESS_STATUS heartbeat");
+  params.add("status_period_s", 1.0, "s", "period of the PROCESS_STATUS heartbeat",
+             Range::between(0.01, 60));
 }
 
 std::string lcmUrl(const Params& params) {
@@ -111,7 +118,7 @@ ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::
 
 void addImageEncodingParams(Params& params) {
   params.add("encoding", "raw", "image encoding in STEREO_FRAME: raw or jpeg");
-  params.add("jpeg_quality", 90, "", "JPEG quality 1..100");
+  params.add("jpeg_quality", 90, "", "JPEG quality", Range::between(1, 100));
 }
 
 int8_t imageEncodingFrom(const Params& params) {
@@ -127,53 +134,21 @@ int8_t imageEncodingFrom(const Params& params) {
 }
 
 bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error) {
-  int channels = 0;
-  switch (msg.pixel_format) {
-    case ptzstereo::image_t::PIXEL_GRAY8:
-      channels = 1;
-      break;
-    case ptzstereo::image_t::PIXEL_BGR8:
-    case ptzstereo::image_t::PIXEL_RGB8:
-      channels = 3;
-      break;
-    default:
-      *error = "unknown pixel_format " + std::to_string(msg.pixel_format);
-      return false;
-  }
-  if (msg.width <= 0 || msg.height <= 0 || msg.width > 16384 || msg.height > 16384) {
-    *error = "bad size " + std::to_string(msg.width) + "x" + std::to_string(msg.height);
-    return false;
-  }
-  if (msg.data_size != static_cast<int32_t>(msg.data.size())) {
-    *error = "data_size does not match data";
-    return false;
-  }
-  if (!std::isfinite(msg.pan_rad) || !std::isfinite(msg.tilt_rad) || !std::isfinite(msg.zoom)) {
-    *error = "non-finite pan/tilt/zoom";
-    return false;
-  }
+  if (!checkImage(msg, kMaxImageSidePx, error)) return false;
+  const int channels = msg.pixel_format == ptzstereo::image_t::PIXEL_GRAY8 ? 1 : 3;
   if (msg.encoding == ptzstereo::image_t::ENCODING_RAW) {
-    if (msg.row_stride < msg.width * channels ||
-        static_cast<int64_t>(msg.row_stride) * msg.height > msg.data_size) {
-      *error = "raw data truncated or row_stride too small";
-      return false;
-    }
     cv::Mat view(msg.height, msg.width, CV_8UC(channels), const_cast<uint8_t*>(msg.data.data()),
                  static_cast<size_t>(msg.row_stride));
     view.copyTo(*image);
-  } else if (msg.encoding == ptzstereo::image_t::ENCODING_JPEG) {
-    *image = cv::imdecode(msg.data, channels == 3 ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE);
-    if (image->empty()) {
+  } else {
+    // The header has been checked against width, height and channels: the decoded size is known.
+    // EXIF orientation is ignored: a camera's frame is as its header says.
+    *image = cv::imdecode(msg.data, (channels == 3 ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE) |
+                                        cv::IMREAD_IGNORE_ORIENTATION);
+    if (image->empty() || image->cols != msg.width || image->rows != msg.height) {
       *error = "JPEG data does not decode";
       return false;
     }
-    if (image->cols != msg.width || image->rows != msg.height) {
-      *error = "JPEG size differs from width/height";
-      return false;
-    }
-  } else {
-    *error = "unknown encoding " + std::to_string(msg.encoding);
-    return false;
   }
   if (msg.pixel_format == ptzstereo::image_t::PIXEL_RGB8) {
     cv::cvtColor(*image, *image, cv::COLOR_RGB2BGR);
@@ -251,6 +226,7 @@ StatusReporter::ChannelStats& StatusReporter::stats(const std::string& ch, int8_
 void StatusReporter::countIn(const std::string& ch, double latency_ms) {
   auto& s = stats(ch, ptzstereo::channel_status_t::DIRECTION_IN);
   ++s.messages;
+  if (auto it = expected_.find(ch); it != expected_.end()) it->second.last_utime = clock_();
   if (latency_ms >= 0 && s.latencies_ms.size() < 100000) s.latencies_ms.push_back(latency_ms);
 }
 
@@ -260,9 +236,54 @@ void StatusReporter::countOut(const std::string& ch, double latency_ms) {
   if (latency_ms >= 0 && s.latencies_ms.size() < 100000) s.latencies_ms.push_back(latency_ms);
 }
 
-void StatusReporter::countDropped(const std::string& ch, const std::string& reason) {
-  ++stats(ch, ptzstereo::channel_status_t::DIRECTION_IN).dropped;
-  increment("dropped_" + reason);
+void StatusReporter::countDropped(const std::string& ch, const std::string& reason, int64_t n) {
+  stats(ch, ptzstereo::channel_status_t::DIRECTION_IN).dropped += n;
+  increment("dropped_" + reason, n);
+  increment(ch + ".dropped_" + reason, n);
+}
+
+void StatusReporter::expectInput(const std::string& ch, double warn_after_s, double error_after_s) {
+  expected_[ch] = {warn_after_s, error_after_s, clock_()};
+}
+
+void StatusReporter::publishFailed(const std::string& ch) {
+  const int error = errno;
+  last_publish_failure_utime_ = clock_();
+  last_publish_failure_ = ch + ": " + (error ? std::strerror(error) : "LCM refused the message");
+  increment("publish_failures");
+  increment(ch + ".publish_failures");
+  log_.warn("publish " + ch, process_ + ": cannot publish " + last_publish_failure_ +
+                                 " (multicast route? scripts/check-network says)");
+}
+
+std::pair<int8_t, std::string> StatusReporter::health() const {
+  using S = ptzstereo::process_status_t;
+  const int64_t now = clock_();
+  int8_t state = state_;
+  std::string message = message_;
+  auto add = [&](int8_t s, const std::string& m) {
+    state = std::max(state, s);
+    message += (message.empty() ? "" : "; ") + m;
+  };
+  for (const auto& [ch, e] : expected_) {
+    const double silent_s = (now - e.last_utime) * 1e-6;
+    if (silent_s >= e.error_after_s) {
+      add(S::STATE_ERROR, "no " + ch + " for " + formatNumber(std::floor(silent_s)) + " s");
+    } else if (silent_s >= e.warn_after_s) {
+      add(S::STATE_WARN, "no " + ch + " for " + formatNumber(std::floor(silent_s)) + " s");
+    }
+  }
+  if (last_publish_failure_utime_ != 0 &&
+      now - last_publish_failure_utime_ < static_cast<int64_t>(kPublishErrorHoldS * 1e6)) {
+    add(S::STATE_ERROR, "cannot publish " + last_publish_failure_);
+  }
+  return {state, message};
+}
+
+void StatusReporter::feedWatchdog(int64_t now_utime) {
+  if (now_utime - last_watchdog_utime_ < 200'000) return;
+  last_watchdog_utime_ = now_utime;
+  sd_notify(0, "WATCHDOG=1");
 }
 
 void StatusReporter::increment(const std::string& name, int64_t by) {
@@ -289,13 +310,14 @@ void StatusReporter::setState(int8_t state, const std::string& message) {
 }
 
 bool StatusReporter::maybePublish() {
-  if (wallUtime() - last_publish_utime_ < static_cast<int64_t>(period_s_ * 1e6)) return false;
+  feedWatchdog(clock_());
+  if (clock_() - last_publish_utime_ < static_cast<int64_t>(period_s_ * 1e6)) return false;
   publishNow();
   return true;
 }
 
 void StatusReporter::publishNow() {
-  const int64_t now = wallUtime();
+  const int64_t now = clock_();
   const double period_s = std::max(1e-6, (now - last_publish_utime_) * 1e-6);
   ptzstereo::process_status_t msg{};
   msg.utime = now;
@@ -303,8 +325,7 @@ void StatusReporter::publishNow() {
   msg.hostname = hostname_;
   msg.pid = static_cast<int32_t>(getpid());
   msg.uptime_s = (now - start_utime_) * 1e-6;
-  msg.state = state_;
-  msg.message = message_;
+  std::tie(msg.state, msg.message) = health();
   for (auto& [key, s] : channels_) {
     ptzstereo::channel_status_t c{};
     c.channel = key.substr(0, key.size() - 1);
@@ -321,14 +342,97 @@ void StatusReporter::publishNow() {
   msg.num_channels = static_cast<int32_t>(msg.channels.size());
   for (const auto& [name, value] : counters_) msg.counters.push_back({name, value});
   msg.num_counters = static_cast<int32_t>(msg.counters.size());
-  lcm_->publish(channel_, &msg);
+  if (lcm_->publish(channel_, &msg) != 0) publishFailed(channel_);
   last_publish_utime_ = now;
+  if (!announced_) {
+    announced_ = true;
+    sd_notify(0, "READY=1");
+  }
+  feedWatchdog(now);
+}
+
+bool messageWaiting(lcm::LCM& lcm) {
+  pollfd fd{lcm.getFileno(), POLLIN, 0};
+  return ::poll(&fd, 1, 0) > 0 && (fd.revents & POLLIN);
+}
+
+namespace {
+std::map<lcm::LCM*, std::vector<PendingDelivery*>>& pendingRegistry() {
+  static std::map<lcm::LCM*, std::vector<PendingDelivery*>> registry;
+  return registry;
+}
+}  // namespace
+
+void registerPending(lcm::LCM* lcm, PendingDelivery* sub) {
+  pendingRegistry()[lcm].push_back(sub);
+}
+
+void unregisterPending(lcm::LCM* lcm, PendingDelivery* sub) {
+  auto& subs = pendingRegistry()[lcm];
+  subs.erase(std::remove(subs.begin(), subs.end(), sub), subs.end());
+  if (subs.empty()) pendingRegistry().erase(lcm);
+}
+
+int handleNewest(lcm::LCM& lcm, int timeout_ms, int max_drain) {
+  const int handled = lcm.handleTimeout(timeout_ms);
+  if (handled <= 0) return handled;
+  for (int i = 0; i < max_drain && messageWaiting(lcm); ++i) {
+    if (lcm.handleTimeout(0) <= 0) break;
+  }
+  auto it = pendingRegistry().find(&lcm);
+  if (it == pendingRegistry().end()) return handled;
+  const std::vector<PendingDelivery*> subs = it->second;  // a handler may subscribe
+  for (PendingDelivery* sub : subs) sub->deliver();
+  return handled;
+}
+
+void SequenceCounter::chargeGap(StatusReporter& status, const std::string& channel, int64_t missing,
+                                bool own_sequence) {
+  if (missing <= 0) return;
+  if (own_sequence) {
+    status.countDropped(channel, "seq_gap", missing);
+  } else {
+    status.increment(channel + ".seq_gap", missing);
+  }
+}
+
+void SequenceCounter::count(StatusReporter& status, const std::string& channel, int64_t seq,
+                            bool own_sequence) {
+  if (seq < 0) return;
+  if (last_seq_ < 0) {
+    last_seq_ = seq;
+    return;
+  }
+  if (jump_seq_ >= 0) {
+    const int64_t after_jump = saturatingDiffUs(seq, jump_seq_);
+    if (after_jump > 0 && after_jump <= kMaxGap) {  // it goes on from the jump: it was real
+      const int64_t missing = jump_seq_ - last_seq_ - 1;
+      if (missing < kMaxGap) {
+        chargeGap(status, channel, missing, own_sequence);
+      } else {
+        status.increment(channel + ".seq_restart");  // a new source, not lost frames
+      }
+      last_seq_ = jump_seq_;
+    } else {
+      status.increment(channel + ".seq_outlier");
+    }
+    jump_seq_ = -1;
+  }
+  const int64_t step = saturatingDiffUs(seq, last_seq_);
+  if (step == 1) {
+    last_seq_ = seq;
+  } else if (step > 1) {
+    jump_seq_ = seq;
+  } else {
+    status.increment(channel + ".seq_restart");
+    last_seq_ = seq;
+  }
 }
 
 int serveUntilStopped(lcm::LCM& lcm, StatusReporter& status) {
   status.publishNow();
   while (!StopFlag::stopRequested()) {
-    lcm.handleTimeout(100);
+    handleNewest(lcm, 100);
     status.maybePublish();
   }
   status.publishNow();

@@ -8,7 +8,9 @@ PTZ_PACKAGES=(
   build-essential cmake pkg-config clang-format
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev pcl-tools
-  libgpiod-dev libgtest-dev
+  libgpiod-dev libgtest-dev libsystemd-dev libjpeg-dev
+  # the fuzz targets (fuzz/, scripts/fuzz): Debian 12's clang 14, libFuzzer and sanitizer runtimes
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev
   # GStreamer for ptz-camera's RTSP cameras (plugins-bad: openh264dec, their H.264 decoder)
   gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad gstreamer1.0-rtsp
   libgstrtspserver-1.0-dev

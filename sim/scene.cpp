@@ -13,10 +13,9 @@ Trajectory::Type Trajectory::parseType(const std::string& name, const std::strin
   if (name == "circle") return Type::kCircle;
   if (name == "figure_eight") return Type::kFigureEight;
   if (name == "random_walk") return Type::kRandomWalk;
-  throw ConfigError(where +
-                    ": field 'trajectory' must be one of static, line, circle, "
-                    "figure_eight, random_walk (got '" +
-                    name + "')");
+  throw ConfigError(fieldPath(where, "trajectory") +
+                    ": must be one of static, line, circle, figure_eight, random_walk, got '" +
+                    name + "'");
 }
 
 Eigen::Vector3d Trajectory::position(double t) const {
@@ -78,10 +77,61 @@ std::vector<Eigen::Vector3d> Chessboard::innerCorners() const {
 namespace {
 
 Eigen::Vector3d vec3(const cv::FileNode& n, const std::string& field, const std::string& where,
-                     const Eigen::Vector3d& fallback) {
+                     const Eigen::Vector3d& fallback, const Range& range = {}) {
   if (n[field].empty()) return fallback;
-  auto v = readNumbers(n, field, 3, where);
+  auto v = readNumbers(n, field, 3, where, range);
   return {v[0], v[1], v[2]};
+}
+
+unsigned readSeed(const cv::FileNode& n, const std::string& field, const std::string& where,
+                  unsigned fallback) {
+  if (n[field].empty()) return fallback;
+  return static_cast<unsigned>(readInt(n, field, where, Range::atLeast(0)));
+}
+
+// The fields an object may have (besides those of its shape).
+const std::vector<std::string> kObjectFields = {"name",     "class",      "shape",    "color_bgr",
+                                                "textured", "trajectory", "centre_m", "amplitude_m",
+                                                "period_s", "phase_rad",  "seed"};
+
+SceneObject readObject(const cv::FileNode& n, const std::string& w) {
+  SceneObject o;
+  if (!n.isMap()) checkFields(n, {}, w);  // throws "must be a map"; the shape decides the fields
+  const std::string shape = readString(n, "shape", w);
+  std::vector<std::string> known = kObjectFields;
+  if (shape == "sphere") {
+    known.push_back("radius_m");
+  } else if (shape == "box") {
+    known.insert(known.end(), {"half_extents_m", "yaw_rad"});
+  } else {
+    throw ConfigError(fieldPath(w, "shape") + ": must be sphere or box, got '" + shape + "'");
+  }
+  checkFields(n, known, w);
+  o.name = readString(n, "name", w);
+  o.class_name = readString(n, "class", w);
+  if (shape == "sphere") {
+    o.shape = SceneObject::Shape::kSphere;
+    o.radius_m = readDouble(n, "radius_m", w, Range::above(0));
+  } else {
+    o.shape = SceneObject::Shape::kBox;
+    o.half_extents_m = vec3(n, "half_extents_m", w, Eigen::Vector3d::Zero(), Range::above(0));
+    if ((o.half_extents_m.array() <= 0).any()) {
+      throw ConfigError(w + ": missing field 'half_extents_m'");
+    }
+    o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0);
+  }
+  const auto bgr = readNumbers(n, "color_bgr", 3, w, Range::between(0, 255));
+  for (int k = 0; k < 3; ++k) o.color_bgr[k] = static_cast<uchar>(bgr[k]);
+  o.textured = !n["textured"].empty() && readInt(n, "textured", w, Range::between(0, 1)) != 0;
+  Trajectory& t = o.trajectory;
+  t.type =
+      Trajectory::parseType(n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
+  t.centre_m = vec3(n, "centre_m", w, t.centre_m);
+  t.amplitude_m = vec3(n, "amplitude_m", w, t.amplitude_m);
+  t.period_s = readDouble(n, "period_s", w, t.period_s, Range::above(0));
+  t.phase_rad = readDouble(n, "phase_rad", w, 0.0);
+  t.seed = readSeed(n, "seed", w, t.seed);
+  return o;
 }
 
 }  // namespace
@@ -91,70 +141,34 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
   Scene scene;
   if (!scene_node.empty()) {
     const std::string w = where + ", scene";
-    scene.backdrop_distance_m = readDouble(scene_node, "backdrop_distance_m", w, 8.0);
+    checkFields(scene_node,
+                {"backdrop_distance_m", "floor_height_m", "texture_m_per_texel", "texture_seed"},
+                w);
+    scene.backdrop_distance_m =
+        readDouble(scene_node, "backdrop_distance_m", w, 8.0, Range::above(0.5));
     scene.floor_height_m = readDouble(scene_node, "floor_height_m", w, 1.4);
-    scene.texture_m_per_texel = readDouble(scene_node, "texture_m_per_texel", w, 0.01);
-    if (!scene_node["texture_seed"].empty()) {
-      scene.texture_seed = static_cast<unsigned>(readInt(scene_node, "texture_seed", w));
-    }
-    if (scene.backdrop_distance_m <= 0.5 || scene.texture_m_per_texel <= 0) {
-      throw ConfigError(w + ": backdrop_distance_m must exceed 0.5 and texture_m_per_texel be > 0");
-    }
+    scene.texture_m_per_texel =
+        readDouble(scene_node, "texture_m_per_texel", w, 0.01, Range::above(0));
+    scene.texture_seed = readSeed(scene_node, "texture_seed", w, scene.texture_seed);
   }
   if (!objects.empty()) {
-    if (!objects.isSeq()) throw ConfigError(where + ": field 'objects' must be a list");
+    if (!objects.isSeq()) throw ConfigError(where + ", objects: must be a list");
     int i = 0;
     for (const auto& n : objects) {
-      const std::string w = where + ", objects[" + std::to_string(i++) + "]";
-      SceneObject o;
-      o.name = readString(n, "name", w);
-      o.class_name = readString(n, "class", w);
-      const std::string shape = readString(n, "shape", w);
-      if (shape == "sphere") {
-        o.shape = SceneObject::Shape::kSphere;
-        o.radius_m = readDouble(n, "radius_m", w);
-        if (o.radius_m <= 0) throw ConfigError(w + ": field 'radius_m' must be > 0");
-      } else if (shape == "box") {
-        o.shape = SceneObject::Shape::kBox;
-        o.half_extents_m = vec3(n, "half_extents_m", w, Eigen::Vector3d::Zero());
-        if ((o.half_extents_m.array() <= 0).any()) {
-          throw ConfigError(w + ": field 'half_extents_m' must be three numbers > 0");
-        }
-        o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0);
-      } else {
-        throw ConfigError(w + ": field 'shape' must be sphere or box (got '" + shape + "')");
-      }
-      auto bgr = readNumbers(n, "color_bgr", 3, w);
-      for (int k = 0; k < 3; ++k) {
-        if (bgr[k] < 0 || bgr[k] > 255) throw ConfigError(w + ": field 'color_bgr' must be 0..255");
-        o.color_bgr[k] = static_cast<uchar>(bgr[k]);
-      }
-      o.textured = !n["textured"].empty() && readInt(n, "textured", w) != 0;
-      Trajectory& t = o.trajectory;
-      t.type = Trajectory::parseType(
-          n["trajectory"].empty() ? "static" : readString(n, "trajectory", w), w);
-      t.centre_m = vec3(n, "centre_m", w, t.centre_m);
-      t.amplitude_m = vec3(n, "amplitude_m", w, t.amplitude_m);
-      t.period_s = readDouble(n, "period_s", w, t.period_s);
-      t.phase_rad = readDouble(n, "phase_rad", w, 0.0);
-      if (!n["seed"].empty()) t.seed = static_cast<unsigned>(readInt(n, "seed", w));
-      if (t.period_s <= 0) throw ConfigError(w + ": field 'period_s' must be > 0");
-      scene.objects.push_back(o);
+      scene.objects.push_back(readObject(n, where + ", objects[" + std::to_string(i++) + "]"));
     }
   }
   if (!board.empty()) {
     const std::string w = where + ", chessboard";
+    checkFields(board, {"inner_cols", "inner_rows", "square_m", "centre_m", "rotation_vector"}, w);
     Chessboard& b = scene.chessboard;
     b.present = true;
-    b.inner_cols = readInt(board, "inner_cols", w);
-    b.inner_rows = readInt(board, "inner_rows", w);
-    b.square_m = readDouble(board, "square_m", w);
+    b.inner_cols = readInt(board, "inner_cols", w, Range::between(2, 1000));
+    b.inner_rows = readInt(board, "inner_rows", w, Range::between(2, 1000));
+    b.square_m = readDouble(board, "square_m", w, Range::above(0));
     b.centre_head_m = vec3(board, "centre_m", w, b.centre_head_m);
     const Eigen::Vector3d rvec = vec3(board, "rotation_vector", w, Eigen::Vector3d::Zero());
     if (rvec.norm() > 0) b.rotation_head_board = Eigen::AngleAxisd(rvec.norm(), rvec.normalized());
-    if (b.inner_cols < 2 || b.inner_rows < 2 || b.square_m <= 0) {
-      throw ConfigError(w + ": needs inner_cols, inner_rows >= 2 and square_m > 0");
-    }
   }
   return scene;
 }

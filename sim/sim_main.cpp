@@ -12,6 +12,7 @@
 #include <mutex>
 #include <thread>
 
+#include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "sim/sim_messages.hpp"
@@ -29,18 +30,21 @@ void declare(Params& p) {
   addPlantParams(p);
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   p.add("clock", "realtime", "realtime or lockstep");
-  p.add("frame_rate_hz", 30.0, "Hz", "stereo frame rate (sim time)");
-  p.add("frames", 0, "", "stop after this many frames (0: no limit)");
-  p.add("duration_s", 0.0, "s", "stop after this much sim time (0: no limit)");
+  p.add("frame_rate_hz", 30.0, "Hz", "stereo frame rate (sim time)", Range::between(0.1, 1000));
+  p.add("frames", 0, "", "stop after this many frames (0: no limit)", Range::atLeast(0));
+  p.add("duration_s", 0.0, "s", "stop after this much sim time (0: no limit)", Range::atLeast(0));
   addImageEncodingParams(p);
-  p.add("noise_sigma", 2.0, "grey levels", "standard deviation of the pixel noise");
-  p.add("seed", 1, "", "seed of the pixel noise");
-  p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)");
-  p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time");
-  p.add("max_setpoint_age_ms", 500.0, "ms", "realtime: drop setpoints published longer ago");
+  p.add("noise_sigma", 2.0, "grey levels", "standard deviation of the pixel noise",
+        Range::between(0, 255));
+  p.add("seed", 1, "", "seed of the pixel noise", Range::atLeast(0));
+  p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)", Range::between(1, 10000));
+  p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time",
+        Range::above(0));
+  addFreshnessParams(p, "setpoint", 500.0, "realtime: a PTZ_SETPOINT answering a frame");
   p.add("visca_port", 0, "",
         "realtime: serve the heads as VISCA-over-IP cameras on 127.0.0.1 at this UDP port "
-        "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)");
+        "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)",
+        Range::between(0, 65534));
   p.add("visca_model", "", "VISCA camera model file the heads pretend to be (visca_port)");
   p.addSection("scene",
                "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
@@ -62,6 +66,7 @@ class SimNode {
         frame_period_s_(1.0 / p.getDouble("frame_rate_hz")),
         state_period_s_(1.0 / p.getDouble("state_rate_hz")),
         encoding_(imageEncodingFrom(p)),
+        setpoint_freshness_(freshnessFrom(p, "setpoint")),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_truth_(channel(p, channels::kSimTruth)),
@@ -84,7 +89,8 @@ class SimNode {
     } else {
       setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
           *lcm_, ch_setpoint_, status_,
-          [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); });
+          [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },
+          Delivery::kNewest);
     }
     start_wall_utime_ = wallUtime();
     start_steady_ = std::chrono::steady_clock::now();
@@ -144,8 +150,7 @@ class SimNode {
       const double now = realtimeNow();
       if (now >= t_frame) {
         // Setpoints that arrived meanwhile act now, even when the frames run late.
-        while (lcm_->handleTimeout(0) > 0) {
-        }
+        handleNewest(*lcm_, 0);
         if (now - t_frame > frame_period_s_) {
           status_.increment("frames_skipped_late");
           return false;
@@ -163,7 +168,7 @@ class SimNode {
     }
   }
 
-  void waitForInput(int timeout_ms) { lcm_->handleTimeout(timeout_ms); }
+  void waitForInput(int timeout_ms) { handleNewest(*lcm_, timeout_ms); }
 
   // The VISCA cameras: every datagram is answered as it comes, with the motors at that moment.
   void serveVisca() {
@@ -202,8 +207,7 @@ class SimNode {
     ptzstereo::ptz_state_t msg = makeStateMessage(sim_->plant(), simUtime(sim_->time()));
     msg.setpoint_utime = last_setpoint_utime_;
     msg.publish_utime = wallUtime();
-    lcm_->publish(ch_state_, &msg);
-    status_.countOut(ch_state_, -1);
+    status_.publish(ch_state_, msg);
   }
 
   void publishFrame() {
@@ -221,12 +225,10 @@ class SimNode {
         makeFrameMessage(frame, utime, encoding_, p_.getInt("jpeg_quality"));
     const int64_t now = wallUtime();
     msg.publish_utime = now;
-    lcm_->publish(ch_frame_, &msg);
-    status_.countOut(ch_frame_, lockstep_ ? -1 : (now - utime) / 1000.0);
+    status_.publish(ch_frame_, msg, lockstep_ ? -1 : (now - utime) / 1000.0);
     status_.increment("frames_published");
     truth.publish_utime = wallUtime();
-    lcm_->publish(ch_truth_, &truth);
-    status_.countOut(ch_truth_, -1);
+    status_.publish(ch_truth_, truth);
   }
 
   void awaitAnswer(int64_t seq) {
@@ -243,7 +245,7 @@ class SimNode {
         status_.increment("lockstep_timeouts");
         break;
       }
-      lcm_->handleTimeout(static_cast<int>(std::min<int64_t>(left, 100)));
+      handleNewest(*lcm_, static_cast<int>(std::min<int64_t>(left, 100)));
       status_.maybePublish();
     }
     awaiting_seq_ = -1;
@@ -260,9 +262,13 @@ class SimNode {
       // The answer to frame n is issued at that frame's capture time; tau delays it.
       t_apply = msg->frame_seq >= 0 ? current_frame_t_ : sim_->time();
     } else {
-      const double age_ms = (wallUtime() - msg->publish_utime) / 1000.0;
-      if (age_ms > p_.getDouble("max_setpoint_age_ms")) {
-        status_.countDropped(ch, "setpoint_stale");
+      // Judged by the capture time of the frame it answers: a setpoint for an old frame is old.
+      const Freshness fresh =
+          judgeFreshness(msg->utime, msg->publish_utime, wallUtime(), setpoint_freshness_);
+      if (fresh != Freshness::kFresh) {
+        status_.countDropped(ch, std::string("setpoint_") + freshnessReason(fresh));
+        log_.warn("fresh", std::string("ptz-sim: dropped a ") + freshnessReason(fresh) +
+                               " setpoint (frame " + std::to_string(msg->frame_seq) + ")");
         return;
       }
       t_apply = std::max(sim_->time(), realtimeNow());
@@ -291,6 +297,7 @@ class SimNode {
   bool lockstep_;
   double frame_period_s_, state_period_s_;
   int8_t encoding_;
+  FreshnessLimits setpoint_freshness_;
   std::string ch_frame_, ch_state_, ch_truth_, ch_setpoint_;
   std::unique_ptr<Simulator> sim_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
@@ -324,15 +331,9 @@ int main(int argc, char** argv) {
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
     const std::string clock = p.getString("clock");
     if (clock != "realtime" && clock != "lockstep") {
-      throw ConfigError("parameter 'clock' must be realtime or lockstep, got '" + clock + "'");
+      throw p.invalid("clock", "must be realtime or lockstep");
     }
     imageEncodingFrom(p);  // throws for a bad encoding or quality
-    const double fps = p.getDouble("frame_rate_hz"), state_hz = p.getDouble("state_rate_hz");
-    if (!(fps >= 0.1 && fps <= 1000) || !(state_hz >= 1 && state_hz <= 10000)) {
-      throw ConfigError(
-          "parameters 'frame_rate_hz' (0.1..1000) and 'state_rate_hz' (1..10000) "
-          "are out of range");
-    }
     sim::SimNode node(p, &lcm);
     return node.run();
   });

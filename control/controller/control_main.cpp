@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 
+#include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "control/controller/controller.hpp"
 #include "control/controller/delay_monitor.hpp"
@@ -17,35 +18,47 @@ namespace {
 
 void declare(Params& p) {
   addTransportParams(p);
+  addFreshnessParams(p, "pose", 500.0, "an OBJECT_POSE");
   addPlantParams(p);  // the limits; the motor model itself is the plant's business
   const ControllerParams d;
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   p.add("mode", "track",
         "track (default: zero steady-state error, feed-forward), paper, or smith (long delays)");
-  p.add("paper_gain", d.paper_gain, "", "P gain of the paper mode");
+  p.add("paper_gain", d.paper_gain, "", "P gain of the paper mode", Range::above(0));
   p.add("zoom_mode", "size", "size (keep target_radius_px) or hold");
-  p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target");
-  p.add("max_zoom", d.max_zoom, "ratio", "highest zoom the controller asks for");
-  p.add("lead_s", d.lead_s, "s", "feed-forward horizon of the track mode");
-  p.add("rate_filter_s", d.rate_filter_s, "s", "time constant of the angular rate estimate");
-  p.add("max_setpoint_rate", d.max_setpoint_rate, "rad/s", "setpoint slew limit (zoom: ratio/s)");
-  p.add("lost_hold_s", d.lost_hold_s, "s", "hold the last setpoint this long without a target");
-  p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)");
-  p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored");
-  p.add("max_range_m", d.max_range_m, "m", "farther targets are implausible and ignored");
+  p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target",
+        Range::above(0));
+  p.add("max_zoom", d.max_zoom, "ratio", "highest zoom the controller asks for", Range::above(0));
+  p.add("lead_s", d.lead_s, "s", "feed-forward horizon of the track mode", Range::atLeast(0));
+  p.add("rate_filter_s", d.rate_filter_s, "s", "time constant of the angular rate estimate",
+        Range::above(0));
+  p.add("max_setpoint_rate", d.max_setpoint_rate, "rad/s", "setpoint slew limit (zoom: ratio/s)",
+        Range::above(0));
+  p.add("lost_hold_s", d.lost_hold_s, "s", "hold the last setpoint this long without a target",
+        Range::atLeast(0));
+  p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)",
+        Range::above(0));
+  p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored",
+        Range::above(0));
+  p.add("max_range_m", d.max_range_m, "m", "farther targets are implausible and ignored",
+        Range::above(0));
+  p.addOrder("min_range_m", "max_range_m");
   p.add("smith_filter_s", d.smith_filter_s, "s",
-        "smith: time constant of the filter on the model error seen at capture");
+        "smith: time constant of the filter on the model error seen at capture", Range::atLeast(0));
   p.add("smith_extra_delay_s", d.smith_extra_delay_s, "s",
         "smith: delay from capture to the command (delay_us_p50 of the status) added to "
-        "dead_time_s");
+        "dead_time_s",
+        Range::atLeast(0));
   p.add("kf_accel_psd_m2_s3", d.kalman.accel_psd_m2_s3, "m^2/s^3",
-        "smith: spectral density of the target's acceleration (Kalman process noise)");
+        "smith: spectral density of the target's acceleration (Kalman process noise)",
+        Range::above(0));
   p.add("kf_position_sigma_m", d.kf_position_sigma_m, "m",
-        "smith: position noise of a pose that carries no covariance");
+        "smith: position noise of a pose that carries no covariance", Range::above(0));
   p.add("kf_gate_chi2", d.kalman.gate_chi2, "",
-        "smith: poses farther from the prediction (Mahalanobis^2) are outliers");
+        "smith: poses farther from the prediction (Mahalanobis^2) are outliers", Range::above(0));
   p.add("min_phase_margin_deg", 30.0, "deg",
-        "warn when the measured delay leaves the paper's loop less phase margin");
+        "warn when the measured delay leaves the paper's loop less phase margin",
+        Range::between(0, 180));
 }
 
 ControllerParams controllerParams(const Params& p) {
@@ -68,24 +81,12 @@ ControllerParams controllerParams(const Params& p) {
   c.kalman.accel_psd_m2_s3 = p.getDouble("kf_accel_psd_m2_s3");
   c.kf_position_sigma_m = p.getDouble("kf_position_sigma_m");
   c.kalman.gate_chi2 = p.getDouble("kf_gate_chi2");
+  // The numbers' ranges are their declarations'.
   if (c.mode != "track" && c.mode != "paper" && c.mode != "smith") {
-    throw ConfigError("parameter 'mode' must be track, paper or smith, got '" + c.mode + "'");
-  }
-  if (!(c.smith_filter_s >= 0) || !(c.smith_extra_delay_s >= 0) ||
-      !(c.kalman.accel_psd_m2_s3 > 0) || !(c.kf_position_sigma_m > 0) ||
-      !(c.kalman.gate_chi2 > 0)) {
-    throw ConfigError(
-        "kf_accel_psd_m2_s3, kf_position_sigma_m, kf_gate_chi2 must be > 0 and "
-        "smith_filter_s, smith_extra_delay_s >= 0");
+    throw p.invalid("mode", "must be track, paper or smith");
   }
   if (c.zoom_mode != "size" && c.zoom_mode != "hold") {
-    throw ConfigError("parameter 'zoom_mode' must be size or hold, got '" + c.zoom_mode + "'");
-  }
-  if (!(c.target_radius_px > 0) || !(c.max_setpoint_rate > 0) || !(c.home_rate > 0) ||
-      c.lead_s < 0 || !(c.rate_filter_s > 0)) {
-    throw ConfigError(
-        "target_radius_px, max_setpoint_rate, home_rate, rate_filter_s must be > 0 "
-        "and lead_s >= 0");
+    throw p.invalid("zoom_mode", "must be size or hold");
   }
   return c;
 }
@@ -114,28 +115,41 @@ class ControlNode {
         smith_delay_s_(p.getString("mode") == "smith"
                            ? p.getDouble("dead_time_s") + p.getDouble("smith_extra_delay_s")
                            : -1),
+        pose_freshness_(freshnessFrom(p, "pose")),
         ch_pose_(channel(p, channels::kObjectPose)),
         ch_state_(channel(p, channels::kPtzState)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)) {
     poses_ = std::make_unique<SafeSubscription<ptzstereo::object_pose_t>>(
         *lcm_, ch_pose_, status_,
-        [this](const std::string& ch, const ptzstereo::object_pose_t& m) { onPose(ch, &m); }, 1);
+        [this](const std::string& ch, const ptzstereo::object_pose_t& m) { onPose(ch, &m); },
+        Delivery::kNewest);
     states_ = std::make_unique<SafeSubscription<ptzstereo::ptz_state_t>>(
         *lcm_, ch_state_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_state_t&) { status_.countIn(ch, -1); },
-        1);
+        Delivery::kNewest);
+    status_.expectInput(ch_pose_);
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
   void onPose(const std::string& ch, const ptzstereo::object_pose_t* m) {
-    status_.countIn(ch, (wallUtime() - m->utime) / 1000.0);
+    const int64_t received = wallUtime();
+    const bool wall_clock = captureOnWallClock(m->utime, m->publish_utime);
+    const Freshness fresh =
+        judgeFreshness(m->utime, m->publish_utime, received, pose_freshness_, wall_clock);
+    if (fresh != Freshness::kFresh) {
+      status_.countDropped(ch, freshnessReason(fresh));
+      log_.warn("fresh", std::string("ptz-control: dropped a ") + freshnessReason(fresh) +
+                             " pose (frame " + std::to_string(m->frame_seq) + ")");
+      return;
+    }
     if (!finitePose(m->left_ptz) || !finitePose(m->right_ptz)) {
       status_.countDropped(ch, "nonfinite_ptz");
       log_.warn("ptz", "ptz-control: pose message with a non-finite camera pose: dropped");
       return;
     }
+    status_.countIn(ch, latencyMs(m->utime, received));
     std::optional<Observation> target;
     if (m->target_index >= 0 && m->target_index < m->num_objects &&
         m->target_index < static_cast<int32_t>(m->objects.size())) {
@@ -160,11 +174,11 @@ class ControlNode {
     out.left = {sp[0].pan_rad, sp[0].tilt_rad, sp[0].zoom};
     out.right = {sp[1].pan_rad, sp[1].tilt_rad, sp[1].zoom};
     out.publish_utime = wallUtime();
-    lcm_->publish(ch_setpoint_, &out);
-    status_.countOut(ch_setpoint_, (out.publish_utime - m->utime) / 1000.0);
+    status_.publish(ch_setpoint_, out, latencyMs(m->utime, out.publish_utime));
     status_.increment(controller_.tracking() ? "setpoints_tracking" : "setpoints_without_target");
     status_.setCounter("kalman_outliers", controller_.outliersRejected());
-    monitorDelay((out.publish_utime - m->utime) * 1e-6);
+    // Lockstep: capture times are sim time; the delay is measured on the wall clock only.
+    if (wall_clock) monitorDelay(saturatingDiffUs(out.publish_utime, m->utime) * 1e-6);
   }
 
   // Every 30 setpoints: the delay distribution and the phase margin it leaves, in the status.
@@ -202,6 +216,7 @@ class ControlNode {
   Controller controller_;
   DelayMonitor delay_monitor_;
   double smith_delay_s_;  // < 0: not in smith mode
+  FreshnessLimits pose_freshness_;
   std::string ch_pose_, ch_state_, ch_setpoint_;
   std::unique_ptr<SafeSubscription<ptzstereo::object_pose_t>> poses_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;

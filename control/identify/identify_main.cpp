@@ -1,5 +1,7 @@
 // ptz-identify: fits K, T and tau of one axis from an LCM log of a step test (PTZ_SETPOINT and
-// PTZ_STATE) and prints the margins the paper's loop would have with that plant.
+// PTZ_STATE) and prints the margins the paper's loop would have with that plant. A missing,
+// empty or foreign log, or one without those channels, has its own exit code
+// (tools/logs/log_reader.hpp); a damaged log is fitted as far as it reads, with a warning.
 #include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
@@ -11,6 +13,7 @@
 #include "control/stability/stability.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
+#include "tools/logs/log_reader.hpp"
 
 namespace {
 
@@ -27,33 +30,33 @@ int main(int argc, char** argv) {
   ptz::Params p("ptz-identify",
                 "Fits gain K, time constant T and dead time tau of one PTZ axis to a step test "
                 "recorded with lcm-logger (PTZ_SETPOINT and PTZ_STATE), and prints the margins of "
-                "the paper's loop with that plant.");
+                "the paper's loop with that plant.\n" +
+                    ptz::tools::logExitCodesHelp("the fit failed (no step of the axis in the "
+                                                 "log, or the model does not fit)"));
   p.add("log", "", "the LCM log (required)");
   p.add("axis", "left_pan", "left_pan, left_tilt, left_zoom, right_pan, right_tilt, right_zoom");
-  p.add("paper_gain", 1.7, "", "P gain of the loop whose margins are printed");
+  p.add("paper_gain", 1.7, "", "P gain of the loop whose margins are printed",
+        ptz::Range::above(0));
   p.add("channel_prefix", "", "prefix of the channel names");
   try {
-    if (!p.parse(argc, argv)) return 0;
+    if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;
     const std::string axis = p.getString("axis");
     const auto sep = axis.find('_');
     const std::string side = axis.substr(0, sep),
                       what = sep == std::string::npos ? "" : axis.substr(sep + 1);
     if ((side != "left" && side != "right") ||
         (what != "pan" && what != "tilt" && what != "zoom")) {
-      throw ptz::ConfigError(
-          "parameter 'axis' must be left_pan, left_tilt, left_zoom, right_pan, "
-          "right_tilt or right_zoom, got '" +
-          axis + "'");
+      throw p.invalid(
+          "axis", "must be left_pan, left_tilt, left_zoom, right_pan, right_tilt or right_zoom");
     }
     const std::string path = p.getString("log");
     if (path.empty()) throw ptz::ConfigError("--log FILE is required");
-    lcm::LogFile log(path, "r");
-    if (!log.good()) throw ptz::ConfigError("log '" + path + "': cannot read");
+    ptz::tools::LogReader log(path);
     const std::string prefix = p.getString("channel_prefix");
     ptz::control::AxisRecord record;
     std::vector<ptzstereo::ptz_setpoint_t> setpoints;
     bool lockstep = false;
-    while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    while (const lcm::LogEvent* ev = log.next()) {
       if (ev->channel == prefix + "PTZ_STATE") {
         ptzstereo::ptz_state_t s;
         if (s.decode(ev->data, 0, ev->datalen) < 0) continue;
@@ -66,6 +69,14 @@ int main(int argc, char** argv) {
         if (s.decode(ev->data, 0, ev->datalen) >= 0) setpoints.push_back(s);
       }
     }
+    log.requireEvents();
+    log.requireChannels({prefix + "PTZ_STATE", prefix + "PTZ_SETPOINT"});
+    if (!log.breaks().empty()) {
+      std::fprintf(stderr,
+                   "ptz-identify: warning: the log is damaged; fitted what could be "
+                   "read:\n%s",
+                   log.describeBreaks().c_str());
+    }
     // A setpoint acts from when it was issued: in lockstep at the frame time it names, in real
     // time when it was published.
     for (const auto& s : setpoints) {
@@ -75,7 +86,7 @@ int main(int argc, char** argv) {
     const ptz::control::AxisFit fit = ptz::control::identifyAxis(record);
     if (!fit.ok) {
       std::fprintf(stderr, "ptz-identify: %s: %s\n", path.c_str(), fit.error.c_str());
-      return 1;
+      return ptz::tools::log_exit::kVerdict;
     }
     std::printf("%s from %zu states and %zu setpoints (%s clock):\n", axis.c_str(),
                 record.positions.size(), record.setpoints.size(),
@@ -94,9 +105,15 @@ int main(int argc, char** argv) {
       std::printf("  with a P element of %g the loop gain is <= 1: stable for any delay\n",
                   p.getDouble("paper_gain"));
     }
-    return 0;
+    return ptz::tools::log_exit::kOk;
   } catch (const ptz::ConfigError& e) {
     std::fprintf(stderr, "ptz-identify: %s\n", e.what());
-    return 2;
+    return ptz::tools::log_exit::kUsage;
+  } catch (const ptz::tools::LogError& e) {
+    std::fprintf(stderr, "ptz-identify: %s\n", e.what());
+    return e.exitCode();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ptz-identify: stopped: %s\n", e.what());
+    return ptz::tools::log_exit::kFailed;
   }
 }

@@ -190,24 +190,30 @@ int main(int argc, char** argv) {
            "Stability of one axis of the active vision loop: the open loop K / (1 + T s) "
            "e^(-s tau) with unity feedback (paper, eq. 9-14): gain crossover, phase and gain "
            "margins, the largest stable delay tau_max, continuous and sampled at the frame rate.");
-  p.add("gain", 1.7, "", "open-loop gain K (controller P times motor gain)");
-  p.add("time_constant_s", 0.24, "s", "motor time constant T");
-  p.add("delay_s", 0.0, "s", "delay tau (image processing, transport)");
-  p.add("frame_rate_hz", 30.0, "Hz", "frame rate of the sampled loop (0: continuous only)");
+  p.add("gain", 1.7, "", "open-loop gain K (controller P times motor gain)", ptz::Range::above(0));
+  p.add("time_constant_s", 0.24, "s", "motor time constant T", ptz::Range::above(0));
+  p.add("delay_s", 0.0, "s", "delay tau (image processing, transport)", ptz::Range::between(0, 60));
+  p.add("frame_rate_hz", 30.0, "Hz", "frame rate of the sampled loop (0: continuous only)",
+        ptz::Range::between(0, 10000));
   p.add("json", "", "also write every figure as JSON to this file");
   p.add("plots", "", "folder for bode.png, nyquist.png, step.png (gnuplot)");
   p.add("smith", false,
         "also the smith mode's sensitivity to a wrong plant model (K, T off by 30 %, tau off); "
         "the plant is motor_gain / (1 + T s) e^(-s tau)");
-  p.add("motor_gain", 1.0, "", "smith: the motor's own gain (without the paper's P element)");
-  p.add("lead_s", 0.3, "s", "track: the feed-forward horizon of ptz-control's track mode");
-  p.add("rate_filter_s", 0.25, "s", "track: the time constant of its rate estimate");
+  p.add("motor_gain", 1.0, "", "smith: the motor's own gain (without the paper's P element)",
+        ptz::Range::above(0));
+  p.add("lead_s", 0.3, "s", "track: the feed-forward horizon of ptz-control's track mode",
+        ptz::Range::atLeast(0));
+  p.add("rate_filter_s", 0.25, "s", "track: the time constant of its rate estimate",
+        ptz::Range::above(0));
   try {
     if (!p.parse(argc, argv)) return 0;
     control::LoopParams loop{p.getDouble("gain"), p.getDouble("time_constant_s"),
                              p.getDouble("delay_s")};
-    if (!(loop.time_constant_s > 0) || loop.delay_s < 0 || p.getDouble("frame_rate_hz") < 0) {
-      throw ConfigError("need time_constant_s > 0, delay_s >= 0, frame_rate_hz >= 0");
+    // The sampled loop has a state per frame of delay (an eigenvalue problem of that size).
+    if (loop.delay_s * p.getDouble("frame_rate_hz") > 1000) {
+      throw p.invalid("delay_s", "must span at most 1000 frames at frame_rate_hz " +
+                                     p.getString("frame_rate_hz"));
     }
     const auto m = control::continuousMargins(loop);
     const double fps = p.getDouble("frame_rate_hz");

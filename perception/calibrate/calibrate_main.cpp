@@ -34,34 +34,39 @@ void declare(Params& p) {
         "text file of 'left_path right_path [left_pan_deg left_tilt_deg right_pan_deg "
         "right_tilt_deg]' lines (instead of images_dir; pivot: the angles refine the estimate, "
         "one list per board station, separated by commas)");
-  p.add("board_cols", 9, "", "inner corners along a board row (squares - 1)");
-  p.add("board_rows", 6, "", "inner corners along a board column (squares - 1)");
-  p.add("square_m", 0.025, "m", "side of a board square");
+  p.add("board_cols", 9, "", "inner corners along a board row (squares - 1)",
+        Range::between(2, 1000));
+  p.add("board_rows", 6, "", "inner corners along a board column (squares - 1)",
+        Range::between(2, 1000));
+  p.add("square_m", 0.025, "m", "side of a board square", Range::above(0));
   p.add("output", "rig_calibrated.yaml", "rig file to write (StereoRig + calibration report)");
   p.add("camera_info_dir", "", "also write ROS camera_info left.yaml/right.yaml here; empty: no");
-  p.add("zoom", 1.0, "", "zoom position of both cameras in the images (their zoom table entry)");
-  p.add("min_views", 8, "", "fewest views with the board in both images");
-  p.add("max_view_error_px", 1.0, "px", "per-view RMS above which a view is an outlier");
+  p.add("zoom", 1.0, "", "zoom position of both cameras in the images (their zoom table entry)",
+        Range::above(0));
+  p.add("min_views", 8, "", "fewest views with the board in both images", Range::atLeast(1));
+  p.add("max_view_error_px", 1.0, "px", "per-view RMS above which a view is an outlier",
+        Range::above(0));
   p.add("drop_outliers", false, "recalibrate without the outlier views (else only report them)");
-  p.add("min_tilt_deg", 10.0, "deg", "some view must tilt the board at least this much");
+  p.add("min_tilt_deg", 10.0, "deg", "some view must tilt the board at least this much",
+        Range::between(0, 90));
   p.add("refine_intrinsics", true,
         "refine the intrinsics jointly with R, T in the stereo fit (false: keep the mono ones)");
-  p.add("rectify_alpha", 0.0, "", "stereoRectify alpha: 0 valid pixels only, 1 all pixels");
-  p.add("target_views", 20, "", "lcm: stop after keeping this many views (or on SIGINT)");
+  p.add("rectify_alpha", 0.0, "",
+        "stereoRectify alpha: 0 valid pixels only, 1 all pixels (-1: OpenCV's default)",
+        Range::between(-1, 1));
+  p.add("target_views", 20, "", "lcm: stop after keeping this many views (or on SIGINT)",
+        Range::between(1, 10000));
   p.add("min_coverage_distance", 0.2, "",
-        "lcm: L1 distance in (x, y, size, skew) a view needs from every kept one");
+        "lcm: L1 distance in (x, y, size, skew) a view needs from every kept one",
+        Range::atLeast(0));
   p.add("home_tolerance_rad", 0.002, "rad",
-        "lcm: frames whose pan or tilt is further from 0 are not used");
+        "lcm: frames whose pan or tilt is further from 0 are not used", Range::atLeast(0));
   p.add("save_views_dir", "", "lcm: also write the kept views as leftNNN.png/rightNNN.png here");
   addTransportParams(p);
 }
 
 BoardSpec boardOf(const Params& p) {
-  BoardSpec board{p.getInt("board_cols"), p.getInt("board_rows"), p.getDouble("square_m")};
-  if (board.inner_cols < 2 || board.inner_rows < 2 || board.square_m <= 0) {
-    throw ConfigError("--board-cols and --board-rows must be >= 2 and --square-m > 0");
-  }
-  return board;
+  return {p.getInt("board_cols"), p.getInt("board_rows"), p.getDouble("square_m")};  // ranged
 }
 
 StereoOptions optionsOf(const Params& p) {
@@ -148,7 +153,7 @@ int runFiles(const Params& p) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::string mode = p.getString("mode");
   if (mode != "stereo" && mode != "zoom" && mode != "pivot") {
-    throw ConfigError("flag --mode: expected stereo, zoom or pivot, got '" + mode + "'");
+    throw p.invalid("mode", "must be stereo, zoom or pivot");
   }
   if (mode != "stereo") rigFileToExtend(p);  // before the slow part
   const bool list = !p.getString("image_list").empty();
@@ -189,7 +194,7 @@ int runLive(const Params& p, lcm::LCM& lcm) {
                     save_dir = p.getString("save_views_dir");
   RateLimitedLog log;
   const double zoom = p.getDouble("zoom");
-  // A queue of one: the board search takes longer than a frame period; work on the newest.
+  // The board search takes longer than a frame period: work on the newest frame.
   SafeSubscription<ptzstereo::stereo_frame_t> frames(
       lcm, ch, status,
       [&](const std::string&, const ptzstereo::stereo_frame_t& m) {
@@ -230,7 +235,7 @@ int runLive(const Params& p, lcm::LCM& lcm) {
         std::fflush(stdout);
         if (n >= target) StopFlag::request();
       },
-      1);
+      Delivery::kNewest);
   std::printf("ptz-calibrate: listening on %s for the board %s; %zu views wanted (Ctrl-C ends)\n",
               ch.c_str(), boardOf(p).text().c_str(), target);
   serveUntilStopped(lcm, status);
@@ -255,8 +260,7 @@ int main(int argc, char** argv) {
     if (p.getString("source") == "lcm")
       return ptz::runProcess(argc, argv, p, ptz::perception::runLive);
     if (p.getString("source") != "files") {
-      throw ptz::ConfigError("flag --source: expected files or lcm, got '" + p.getString("source") +
-                             "'");
+      throw p.invalid("source", "must be files or lcm");
     }
     return ptz::perception::runFiles(p);
   } catch (const ptz::ConfigError& e) {

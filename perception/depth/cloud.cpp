@@ -21,9 +21,11 @@ void declareCloudParams(Params& p) {
   p.add("voxel_size_m", 0.05, "m", "voxel grid leaf size (<= 0: no downsampling)");
   p.add("sor_mean_k", 0, "",
         "PCL's statistical outlier removal on the cloud: neighbours (0: off; costs ~2.7 us a "
-        "point, outlier_stddev_mult does it on the pixel grid for far less)");
+        "point, outlier_stddev_mult does it on the pixel grid for far less)",
+        Range::between(0, 1000));
   p.add("sor_stddev_mult", 2.0, "",
-        "statistical outlier removal: drop points this many standard deviations away");
+        "statistical outlier removal: drop points this many standard deviations away",
+        Range::above(0));
 }
 
 CloudParams CloudParams::fromParams(const Params& p) {
@@ -31,7 +33,6 @@ CloudParams CloudParams::fromParams(const Params& p) {
   c.voxel_size_m = p.getDouble("voxel_size_m");
   c.sor_mean_k = p.getInt("sor_mean_k");
   c.sor_stddev_mult = p.getDouble("sor_stddev_mult");
-  if (c.sor_mean_k < 0) throw ConfigError("parameter 'sor_mean_k' must be >= 0");
   return c;
 }
 

@@ -1,13 +1,15 @@
 // ptz-depth: STEREO_FRAME (+ OBJECT_POSE for the horopter) -> POINT_CLOUD, optionally
-// DISPARITY_IMAGE and PCD files. Always the newest frame (queue of one); outputs carry the source
-// frame's utime and seq; bad frames and unwritable PCD files are counted and warned about, never
-// fatal.
+// DISPARITY_IMAGE and PCD files. Always the newest fresh frame (a backlog is drained, stale frames
+// dropped); outputs carry the source frame's utime and seq; bad frames and unwritable PCD files are
+// counted and warned about, never fatal.
 #include <opencv2/imgproc.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <memory>
 #include <optional>
 
+#include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "perception/depth/cloud.hpp"
 #include "perception/depth/depth.hpp"
@@ -23,10 +25,12 @@ void declare(Params& p) {
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   declareDepthParams(p);
   declareCloudParams(p);
-  p.add("target_max_age_s", 1.0, "s", "an OBJECT_POSE target older than this is not followed");
+  addFreshnessParams(p, "frame", 1000.0, "a STEREO_FRAME");
+  p.add("target_max_age_s", 1.0, "s", "an OBJECT_POSE target older than this is not followed",
+        Range::above(0).andAtMost(3600));
   p.add("pcd_path", "",
         "write clouds as binary PCD here ({seq} is replaced by the frame's seq); empty: none");
-  p.add("pcd_every_n", 0, "", "write every n-th cloud (0: the first only)");
+  p.add("pcd_every_n", 0, "", "write every n-th cloud (0: the first only)", Range::atLeast(0));
   p.add("publish_disparity", false, "publish the disparity on DISPARITY_IMAGE (grey, raw)");
 }
 
@@ -38,6 +42,7 @@ class DepthNode {
         estimator_(std::move(rig), DepthParams::fromParams(p)),
         cloud_params_(CloudParams::fromParams(p)),
         target_max_age_us_(static_cast<int64_t>(p.getDouble("target_max_age_s") * 1e6)),
+        frame_freshness_(freshnessFrom(p, "frame")),
         pcd_path_(p.getString("pcd_path")),
         pcd_every_n_(p.getInt("pcd_every_n")),
         publish_disparity_(p.getBool("publish_disparity")),
@@ -50,18 +55,26 @@ class DepthNode {
         [this](const std::string&, const ptzstereo::object_pose_t& m) { onPose(m); });
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
-        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(m); }, 1);
+        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(m); },
+        Delivery::kNewest);
+    status_.expectInput(ch_frame_);
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
   void onPose(const ptzstereo::object_pose_t& m) {
-    status_.countIn(ch_pose_, (wallUtime() - m.utime) / 1000.0);
-    if (m.target_index < 0 || m.target_index >= static_cast<int32_t>(m.objects.size())) return;
-    const auto& o = m.objects[static_cast<size_t>(m.target_index)];
-    target_head_m_ = Eigen::Vector3d(o.position_m[0], o.position_m[1], o.position_m[2]);
-    target_utime_ = m.utime;
+    if (m.target_index >= 0 && m.target_index < static_cast<int32_t>(m.objects.size())) {
+      const auto& o = m.objects[static_cast<size_t>(m.target_index)];
+      if (!std::isfinite(o.position_m[0]) || !std::isfinite(o.position_m[1]) ||
+          !std::isfinite(o.position_m[2])) {
+        status_.countDropped(ch_pose_, "nonfinite");
+        return;
+      }
+      target_head_m_ = Eigen::Vector3d(o.position_m[0], o.position_m[1], o.position_m[2]);
+      target_utime_ = m.utime;
+    }
+    status_.countIn(ch_pose_, latencyMs(m.utime, wallUtime()));
   }
 
   void drop(const std::string& reason, const std::string& message) {
@@ -71,28 +84,39 @@ class DepthNode {
 
   bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
     std::string error;
-    if (!decodeImage(m.left, left, &error) || !decodeImage(m.right, right, &error)) {
+    const StereoRig& rig = estimator_.rectifier().rig();
+    if (!checkStereoFrame(m, kMaxImageSidePx, &error)) {
       drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
       return false;
     }
-    const StereoRig& rig = estimator_.rectifier().rig();
-    if (left->cols != rig.left.width || left->rows != rig.left.height ||
-        right->size() != left->size() || left->type() != CV_8UC3 || right->type() != CV_8UC3) {
-      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are not " +
-                                std::to_string(rig.left.width) + "x" +
-                                std::to_string(rig.left.height) + " BGR as the rig file says");
+    if (!checkFrameMatchesRig(m, rig.left.width, rig.left.height, &error)) {
+      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": " + error);
+      return false;
+    }
+    if (!decodeImage(m.left, left, &error) || !decodeImage(m.right, right, &error)) {
+      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
       return false;
     }
     return true;
   }
 
   void onFrame(const ptzstereo::stereo_frame_t& m) {
-    status_.countIn(ch_frame_, (wallUtime() - m.utime) / 1000.0);
+    const int64_t received = wallUtime();
+    const bool wall_clock = captureOnWallClock(m.utime, m.publish_utime);
+    const Freshness fresh =
+        judgeFreshness(m.utime, m.publish_utime, received, frame_freshness_, wall_clock);
+    if (fresh != Freshness::kFresh) {
+      drop(freshnessReason(fresh),
+           "frame " + std::to_string(m.seq) + ": " + freshnessReason(fresh));
+      return;
+    }
     cv::Mat left, right;
     if (!decode(m, &left, &right)) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::optional<Eigen::Vector3d> target;
-    if (target_head_m_ && std::abs(m.utime - target_utime_) <= target_max_age_us_) {
+    const int64_t target_age_us = saturatingDiffUs(m.utime, target_utime_);
+    if (target_head_m_ && target_age_us <= target_max_age_us_ &&
+        target_age_us >= -target_max_age_us_) {
       target = target_head_m_;
     }
     std::string why;
@@ -106,11 +130,12 @@ class DepthNode {
         makeCloud(depth_.points_head_m, depth_.colours_bgr, cloud_params_);
     processing_ms_.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    // Counted in once it made a cloud: every frame is either in or dropped, never both.
+    status_.countIn(ch_frame_, latencyMs(m.utime, received));
     cloud.utime = m.utime;
     cloud.frame_seq = m.seq;
     cloud.publish_utime = wallUtime();
-    lcm_->publish(ch_cloud_, &cloud);
-    status_.countOut(ch_cloud_, (cloud.publish_utime - m.utime) / 1000.0);
+    status_.publish(ch_cloud_, cloud, latencyMs(m.utime, cloud.publish_utime));
     if (publish_disparity_) publishDisparity(m);
     ++clouds_;
     status_.increment("frames_processed");
@@ -135,8 +160,7 @@ class DepthNode {
     img.pan_rad = m.left.pan_rad;
     img.tilt_rad = m.left.tilt_rad;
     img.zoom = m.left.zoom;
-    lcm_->publish(ch_disparity_, &img);
-    status_.countOut(ch_disparity_, (wallUtime() - m.utime) / 1000.0);
+    status_.publish(ch_disparity_, img, latencyMs(m.utime, wallUtime()));
   }
 
   void maybeWritePcd(const ptzstereo::point_cloud_t& cloud) {
@@ -162,6 +186,7 @@ class DepthNode {
   DepthEstimator estimator_;
   CloudParams cloud_params_;
   int64_t target_max_age_us_;
+  FreshnessLimits frame_freshness_;
   std::string pcd_path_;
   int pcd_every_n_;
   bool publish_disparity_;

@@ -28,10 +28,15 @@ int main(int argc, char** argv) {
            "invalid counts as bad) and prints JSON.");
   p.add("left", "", "left (reference) image");
   p.add("right", "", "right image");
-  p.add("gt", "", "ground-truth disparity of the left view (0 = unknown)");
+  p.add("gt", "",
+        "ground-truth disparity of the left view: 8- or 16-bit PNG/PGM (0 = unknown) or PFM (inf "
+        "= unknown)");
   p.add("gt_right", "", "ground truth of the right view, for the occlusion mask (optional)");
-  p.add("scale", 1.0, "", "ground-truth pixel value per pixel of disparity");
-  p.add("border_px", 10, "px", "ignored border");
+  p.add("scale", 0.0, "",
+        "ground-truth value per pixel of disparity (0: the format's own, 1 for 8-bit and PFM, "
+        "256 for 16-bit as KITTI)",
+        Range::atLeast(0));
+  p.add("border_px", 10, "px", "ignored border", Range::between(0, 10000));
   declareDepthParams(p);
   try {
     if (!p.parse(argc, argv)) return 0;
@@ -44,14 +49,13 @@ int main(int argc, char** argv) {
     const cv::Mat left = readGray(p.getString("left"), "left");
     const cv::Mat right = readGray(p.getString("right"), "right");
     if (left.size() != right.size()) throw ConfigError("--left and --right differ in size");
-    const cv::Mat gt = loadGroundTruth(p.getString("gt"), p.getDouble("scale"));
-    if (gt.size() != left.size()) throw ConfigError("--gt differs in size from --left");
+    std::string gt_format;
+    const cv::Mat gt =
+        loadGroundTruth(p.getString("gt"), p.getDouble("scale"), left.size(), &gt_format);
     const std::string gt_right_path = p.getString("gt_right");
     const cv::Mat gt_right =
-        gt_right_path.empty() ? cv::Mat() : loadGroundTruth(gt_right_path, p.getDouble("scale"));
-    if (!gt_right.empty() && gt_right.size() != gt.size()) {
-      throw ConfigError("--gt-right differs in size from --gt");
-    }
+        gt_right_path.empty() ? cv::Mat()
+                              : loadGroundTruth(gt_right_path, p.getDouble("scale"), left.size());
 
     DisparityMatcher matcher(dp.matcher);
     const int min_d = dp.horopter.min_disparity_px;
@@ -63,14 +67,15 @@ int main(int argc, char** argv) {
         "{\"mode\": \"%s\", \"wls\": %s, \"min_disparity_px\": %d, \"num_disparities\": %d, "
         "\"block_size_px\": %d, \"bad_all\": %.4f, \"bad_nonocc\": %.4f, "
         "\"invalid_fraction\": %.4f, \"known_px\": %lld, \"nonocc_px\": %lld, "
-        "\"occlusion_from\": \"%s\"}\n",
+        "\"occlusion_from\": \"%s\", \"gt_format\": \"%s\"}\n",
         MatcherParams::modeName(dp.matcher.mode), dp.matcher.wls ? "true" : "false", min_d,
         dp.matcher.num_disparities,
         dp.matcher.mode == MatcherParams::Mode::kBm ? dp.matcher.block_size_px
                                                     : dp.matcher.sgbm_block_size_px,
         s.bad_all, s.bad_nonocc, s.invalid_fraction, static_cast<long long>(s.known_px),
         static_cast<long long>(s.nonocc_px),
-        gt_right.empty() ? "left ground truth warped" : "left-right ground truth");
+        gt_right.empty() ? "left ground truth warped" : "left-right ground truth",
+        gt_format.c_str());
     return 0;
   } catch (const ConfigError& e) {
     std::cerr << "ptz-depth-eval: " << e.what() << "\n";

@@ -17,9 +17,15 @@ struct StereoScore {
   int64_t nonocc_px = 0;
 };
 
-// Ground truth in px (CV_32F, 0 = unknown) from a Middlebury PNG/PGM and its scale; throws
-// ConfigError naming the file.
-cv::Mat loadGroundTruth(const std::string& path, double scale);
+// Ground truth in px (CV_32F, 0 = unknown): the file's value / scale. scale 0: the format's own
+// unit, 1 for 8-bit PNG/PGM (Middlebury 2001-2006 need theirs: 4, 8, 16) and PFM (Middlebury
+// 2014, px, inf = unknown; rows bottom to top, the scale's sign the byte order), 256 for 16-bit
+// PNG (KITTI). 0, and in a PFM anything not a finite positive number, is unknown. The header of
+// a PNG, PGM or PFM is read first and checked (PFM: against the file's size) and against
+// `expected` (the left image's size, when not empty) before anything is decoded. *format (when
+// given): "16-bit PNG, scale 256". Throws ConfigError naming the file.
+cv::Mat loadGroundTruth(const std::string& path, double scale, cv::Size expected = {},
+                        std::string* format = nullptr);
 
 // Pixels of the left view also seen by the right camera (CV_8U, 255). With the right view's
 // ground truth: left-right consistency within 1 px. Without: the left ground truth warped to

@@ -1,11 +1,12 @@
-// ptz-detect: STEREO_FRAME -> OBJECT_DETECTIONS + OBJECT_POSE. Always the newest frame (queue of
-// one); every output carries the source frame's utime and seq; bad frames are dropped, counted
-// and warned about, never fatal.
+// ptz-detect: STEREO_FRAME -> OBJECT_DETECTIONS + OBJECT_POSE. Always the newest fresh frame (those
+// waiting are drained, older ones dropped as superseded, late ones as stale); every output carries
+// the source frame's utime and seq; bad frames are dropped, counted and warned about, never fatal.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 
+#include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/stereo.hpp"
@@ -20,14 +21,16 @@ void declare(Params& p) {
   addTransportParams(p);
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   p.add("target_class", "red_ball", "class of the object of interest (OBJECT_POSE target_index)");
-  p.add("filter_size_px", 3, "px", "median filter size (odd)");
-  p.add("morph_size_px", 3, "px", "opening/closing kernel size");
+  p.add("filter_size_px", 3, "px", "median filter size (odd)", Range::between(1, 99));
+  p.add("morph_size_px", 3, "px", "opening/closing kernel size", Range::between(1, 99));
   p.add("max_epipolar_px", 3.0, "px",
-        "largest distance of a left/right match from its epipolar line");
-  p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match");
-  p.add("pixel_sigma_px", 0.3, "px", "centroid noise for the pose covariance");
-  p.add("min_range_m", 0.3, "m", "nearest accepted object");
-  p.add("max_range_m", 50.0, "m", "farthest accepted object");
+        "largest distance of a left/right match from its epipolar line", Range::above(0));
+  p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match", Range::atLeast(1));
+  p.add("pixel_sigma_px", 0.3, "px", "centroid noise for the pose covariance", Range::above(0));
+  p.add("min_range_m", 0.3, "m", "nearest accepted object", Range::above(0));
+  p.add("max_range_m", 50.0, "m", "farthest accepted object", Range::above(0));
+  p.addOrder("min_range_m", "max_range_m");
+  addFreshnessParams(p, "frame", 500.0, "a STEREO_FRAME");
   p.addSection("classes",
                "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
                "intensity_min, intensity_max, shape: circle|square|any, "
@@ -58,6 +61,7 @@ class DetectNode {
         rig_file_(p.getString("rig_file")),
         detector_(std::move(dp)),
         target_class_(p.getString("target_class")),
+        frame_freshness_(freshnessFrom(p, "frame")),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_detections_(channel(p, channels::kObjectDetections)),
         ch_pose_(channel(p, channels::kObjectPose)) {
@@ -66,16 +70,37 @@ class DetectNode {
     stereo_.pixel_sigma_px = p.getDouble("pixel_sigma_px");
     stereo_.min_range_m = p.getDouble("min_range_m");
     stereo_.max_range_m = p.getDouble("max_range_m");
-    // Always the newest frame, never a backlog: a queue of one.
+    // Always the newest frame, never a backlog.
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
-        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(&m); }, 1);
+        [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(&m); },
+        Delivery::kNewest);
+    status_.expectInput(ch_frame_);
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
+  // Checks the frame against the rig before a pixel is decoded: the rig's size and BGR on both
+  // sides bound what a frame may cost.
+  bool acceptable(const ptzstereo::stereo_frame_t& m) {
+    std::string why;
+    if (!checkStereoFrame(m, kMaxImageSidePx, &why)) {
+      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + why);
+      return false;
+    }
+    if (!checkFrameMatchesRig(m, rig_.left.width, rig_.left.height, &why)) {
+      const std::string rig_file =
+          rig_file_.empty() ? "the built-in rig" : "rig file '" + rig_file_ + "'";
+      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": " + why + " (" + rig_file +
+                                "): calibrate at this image size (ptz-calibrate)");
+      return false;
+    }
+    return true;
+  }
+
   bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
+    if (!acceptable(m)) return false;
     // Both images at once: JPEG decoding is the larger part of a frame's work.
     std::string errors[2];
     bool ok[2] = {false, false};
@@ -88,18 +113,6 @@ class DetectNode {
       drop("bad_image", "frame " + std::to_string(m.seq) + ": " + (ok[0] ? errors[1] : errors[0]));
       return false;
     }
-    if (left->cols != rig_.left.width || left->rows != rig_.left.height ||
-        right->size() != left->size() || left->channels() != 3) {
-      const std::string rig_file =
-          rig_file_.empty() ? "the built-in rig" : "rig file '" + rig_file_ + "'";
-      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": images are " +
-                                std::to_string(left->cols) + "x" + std::to_string(left->rows) +
-                                " (" + std::to_string(left->channels()) + " channels), " +
-                                rig_file + " is for " + std::to_string(rig_.left.width) + "x" +
-                                std::to_string(rig_.left.height) +
-                                " BGR: calibrate at this image size (ptz-calibrate)");
-      return false;
-    }
     return true;
   }
 
@@ -110,9 +123,19 @@ class DetectNode {
 
   void onFrame(const ptzstereo::stereo_frame_t* m) {
     const int64_t received = wallUtime();
-    status_.countIn(ch_frame_, (received - m->utime) / 1000.0);
+    const bool wall_clock = captureOnWallClock(m->utime, m->publish_utime);
+    const Freshness fresh =
+        judgeFreshness(m->utime, m->publish_utime, received, frame_freshness_, wall_clock);
+    if (fresh != Freshness::kFresh) {
+      drop(freshnessReason(fresh),
+           "frame " + std::to_string(m->seq) + ": " + freshnessReason(fresh) + " (published " +
+               formatNumber(saturatingDiffUs(received, m->publish_utime) / 1000.0) + " ms ago)");
+      return;
+    }
     cv::Mat left, right;
     if (!decode(*m, &left, &right)) return;
+    // Counted in once accepted: every message is either in or dropped, never both.
+    status_.countIn(ch_frame_, latencyMs(m->utime, received));
     const auto t0 = std::chrono::steady_clock::now();
     // Left and right on two cores (Detector::detect is const and shares nothing mutable).
     std::vector<Region> lr, rr;
@@ -165,11 +188,9 @@ class DetectNode {
     }
     pose.num_objects = static_cast<int32_t>(pose.objects.size());
     det.publish_utime = wallUtime();
-    lcm_->publish(ch_detections_, &det);
-    status_.countOut(ch_detections_, (det.publish_utime - m->utime) / 1000.0);
+    status_.publish(ch_detections_, det, latencyMs(m->utime, det.publish_utime));
     pose.publish_utime = wallUtime();
-    lcm_->publish(ch_pose_, &pose);
-    status_.countOut(ch_pose_, (pose.publish_utime - m->utime) / 1000.0);
+    status_.publish(ch_pose_, pose, latencyMs(m->utime, pose.publish_utime));
     status_.increment("frames_processed");
     if (pose.target_index < 0) status_.increment("frames_without_target");
     if (processing_ms_.size() >= 30) {
@@ -189,6 +210,7 @@ class DetectNode {
   Detector detector_;
   StereoParams stereo_;
   std::string target_class_;
+  FreshnessLimits frame_freshness_;
   std::string ch_frame_, ch_detections_, ch_pose_;
   std::vector<double> processing_ms_;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
@@ -214,9 +236,8 @@ int main(int argc, char** argv) {
         p.section("classes"), "config file '" + p.configPath() + "'");
     dp.filter_size_px = p.getInt("filter_size_px");
     dp.morph_size_px = p.getInt("morph_size_px");
-    if (dp.filter_size_px < 1 || dp.filter_size_px % 2 == 0 || dp.morph_size_px < 1) {
-      throw ConfigError("filter_size_px must be odd and >= 1, morph_size_px >= 1");
-    }
+    if (dp.filter_size_px % 2 == 0) throw p.invalid("filter_size_px", "must be odd");
+    perception::checkTargetClass(p, dp);
     perception::DetectNode node(p, &lcm, rigFromParams(p), std::move(dp));
     return node.run();
   });

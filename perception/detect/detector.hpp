@@ -32,13 +32,17 @@ struct ColorClass {
 };
 
 struct DetectorParams {
-  int filter_size_px = 3;  // median filter (the paper's 3x3 mask)
-  int morph_size_px = 3;   // opening then closing
+  static constexpr size_t kMaxClasses = 8;  // a bit each in the label image
+  int filter_size_px = 3;                   // median filter (the paper's 3x3 mask)
+  int morph_size_px = 3;                    // opening then closing
   std::vector<ColorClass> classes;
 
   // Reads the config section `classes` (a list of maps with the fields of ColorClass).
   static DetectorParams fromConfig(const cv::FileNode& classes, const std::string& where);
 };
+
+// Throws ConfigError naming its source when parameter `target_class` is none of dp's classes.
+void checkTargetClass(const Params& p, const DetectorParams& dp);
 
 struct Region {
   int class_index = -1;

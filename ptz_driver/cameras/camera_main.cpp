@@ -50,11 +50,11 @@ class CameraNode {
       factories[s] = makeCaptureFactory(config.source[s], config.capture[s], clock, notifier_);
     }
     // Subscribed before any source opens: states published from now on stamp the first frames.
-    // Every state counts for the interpolation (unlike frames): a queue for bursts, not of one.
+    // Every state counts for the interpolation (unlike frames): each one, in order.
     states_ = std::make_unique<SafeSubscription<ptzstereo::ptz_state_t>>(
         *lcm_, ch_state_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_state_t& m) { onState(ch, m); },
-        kStateQueue);
+        Delivery::kEvery, kStateQueue);
     if (config.trigger.enabled()) startTrigger(config.trigger);
     camera_ = std::make_unique<StereoCamera>(config, std::move(factories), &pulses_);
   }
@@ -123,8 +123,7 @@ class CameraNode {
         makeStereoFrame(p.left.capture_utime, seq_++, p.left.image, p.left_pose, p.right.image,
                         p.right_pose, encoding_, jpeg_quality_);
     msg.publish_utime = wallUtime();
-    lcm_->publish(ch_frame_, &msg);
-    status_.countOut(ch_frame_, (msg.publish_utime - msg.utime) / 1000.0);
+    status_.publish(ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
     wait_ms_.push_back((msg.publish_utime - p.first_arrival_utime) / 1000.0);
     ptz_wait_ms_.push_back(p.ptz_wait_us / 1000.0);
   }

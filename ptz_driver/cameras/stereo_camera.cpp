@@ -16,14 +16,6 @@ bool exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
-void requireAtLeast(const Params& p, const std::string& name, double min, bool strict) {
-  const double v = p.getDouble(name);
-  if (!std::isfinite(v) || v < min || (strict && v == min)) {
-    throw ConfigError("parameter '" + name + "' must be " + (strict ? "> " : ">= ") +
-                      std::to_string(min) + ", got " + std::to_string(v));
-  }
-}
-
 std::string joined(const std::vector<std::string>& parts) {
   std::string out;
   for (const auto& s : parts) out += (out.empty() ? "" : "; ") + s;
@@ -42,59 +34,61 @@ void declareCameraParams(Params& p) {
         "exists, else frame index / rate)");
   p.add("right_timestamps", "", "right video/folder capture times (as left_timestamps)");
   p.add("loop", false, "files: play again from the start at the end, times continuing");
-  p.add("file_fps", 0.0, "Hz", "rate of files without timestamps (0: the video's own; folders 30)");
+  p.add("file_fps", 0.0, "Hz", "rate of files without timestamps (0: the video's own; folders 30)",
+        Range::between(0, 1000));
   p.add("latency_s", 0.0, "s",
-        "live sources: capture time = grab time (V4L2: the driver's buffer time) minus this");
-  p.add("left_latency_s", -1.0, "s", "the left camera's own latency_s (negative: latency_s)");
-  p.add("right_latency_s", -1.0, "s", "the right camera's own latency_s (negative: latency_s)");
-  p.add("width", 640, "px",
-        "published width, other sizes resized (0: as delivered); asked of V4L2");
-  p.add("height", 480, "px", "published height (0: as delivered); asked of V4L2");
-  p.add("fps", 30.0, "Hz", "frame rate asked of V4L2 cameras (0: the driver's default)");
+        "live sources: capture time = grab time (V4L2: the driver's buffer time) minus this",
+        Range::between(0, 60));
+  p.add("left_latency_s", -1.0, "s", "the left camera's own latency_s (negative: latency_s)",
+        Range::atMost(60));
+  p.add("right_latency_s", -1.0, "s", "the right camera's own latency_s (negative: latency_s)",
+        Range::atMost(60));
+  p.add("width", 640, "px", "published width, other sizes resized (0: as delivered); asked of V4L2",
+        Range::between(0, 16384));
+  p.add("height", 480, "px", "published height (0: as delivered); asked of V4L2",
+        Range::between(0, 16384));
+  p.add("fps", 30.0, "Hz", "frame rate asked of V4L2 cameras (0: the driver's default)",
+        Range::between(0, 1000));
   p.add("fourcc", "", "pixel format asked of V4L2 cameras, e.g. MJPG (empty: the driver's)");
   p.add("pair_tolerance_s", 0.015, "s",
-        "pair frames whose capture times differ by at most this (keep below half a frame period)");
+        "pair frames whose capture times differ by at most this (keep below half a frame period)",
+        Range::between(0, 10));
   p.add("pair_buffer_frames", 30, "",
-        "frames a side waiting for a partner (live: the oldest beyond unmatched; files wait)");
-  p.add("no_pair_warn_s", 2.0, "s", "status ERROR when both sides deliver but none pair this long");
-  p.add("ptz_history_s", 2.0, "s", "PTZ_STATE kept for stamping frames");
+        "frames a side waiting for a partner (live: the oldest beyond unmatched; files wait)",
+        Range::between(1, 10000));
+  p.add("no_pair_warn_s", 2.0, "s", "status ERROR when both sides deliver but none pair this long",
+        Range::above(0));
+  p.add("ptz_history_s", 2.0, "s", "PTZ_STATE kept for stamping frames", Range::between(0, 3600));
   p.add("max_ptz_extrapolation_s", 0.1, "s",
         "frames further outside the PTZ_STATE history get the nearest state, counted ptz_stale; "
-        "also the longest a pair waits after its capture for a PTZ_STATE");
-  p.add("max_rate_hz", 30.0, "Hz", "publish at most this many pairs a second (0: every pair)");
+        "also the longest a pair waits after its capture for a PTZ_STATE",
+        Range::between(0, 60));
+  p.add("max_rate_hz", 30.0, "Hz", "publish at most this many pairs a second (0: every pair)",
+        Range::between(0, 1000));
   p.add("source_timeout_s", 2.0, "s",
-        "a streaming live source without a frame this long is reopened (not files)");
+        "a streaming live source without a frame this long is reopened (not files)",
+        Range::above(0));
   p.add("open_timeout_s", 5.0, "s",
-        "a live connection without a first frame this long is reopened (not files)");
-  p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure");
-  p.add("retry_max_s", 8.0, "s", "longest reconnection delay");
+        "a live connection without a first frame this long is reopened (not files)",
+        Range::above(0));
+  p.add("retry_initial_s", 0.5, "s", "first reconnection delay; doubles after each failure",
+        Range::above(0));
+  p.add("retry_max_s", 8.0, "s", "longest reconnection delay", Range::above(0));
+  p.addOrder("retry_initial_s", "retry_max_s", false);
   declareTriggerParams(p);
 }
 
 CameraConfig cameraConfigFrom(const Params& p) {
-  for (const char* name : {"file_fps", "latency_s", "fps", "pair_tolerance_s", "ptz_history_s",
-                           "max_ptz_extrapolation_s", "max_rate_hz"}) {
-    requireAtLeast(p, name, 0, false);
-  }
-  for (const char* name :
-       {"no_pair_warn_s", "source_timeout_s", "open_timeout_s", "retry_initial_s", "retry_max_s"}) {
-    requireAtLeast(p, name, 0, true);
-  }
-  if (p.getDouble("retry_max_s") < p.getDouble("retry_initial_s")) {
-    throw ConfigError("parameter 'retry_max_s' must be at least retry_initial_s");
-  }
+  // The numbers' ranges and orders are their declarations'.
+  p.checkOrders();  // values set() after parsing
   const int width = p.getInt("width"), height = p.getInt("height");
-  if (width < 0 || height < 0 || (width == 0) != (height == 0) || width > 16384 || height > 16384) {
-    throw ConfigError("parameters 'width' and 'height' must both be 1..16384, or both 0");
-  }
-  if (p.getInt("pair_buffer_frames") < 1) {
-    throw ConfigError("parameter 'pair_buffer_frames' must be at least 1");
+  if ((width == 0) != (height == 0)) {
+    const bool w0 = width == 0;
+    throw p.invalid(w0 ? "width" : "height",
+                    std::string("may be 0 only when ") + (w0 ? "height" : "width") + " is 0 too");
   }
   const std::string fourcc = p.getString("fourcc");
-  if (!fourcc.empty() && fourcc.size() != 4) {
-    throw ConfigError("parameter 'fourcc' must be four characters (e.g. MJPG), got '" + fourcc +
-                      "'");
-  }
+  if (!fourcc.empty() && fourcc.size() != 4) throw p.invalid("fourcc", "must be four characters");
   CameraConfig c;
   for (size_t s = 0; s < 2; ++s) {
     const std::string side = kSide[s];
@@ -105,9 +99,6 @@ CameraConfig cameraConfigFrom(const Params& p) {
     o.fps = p.getDouble("fps");
     o.fourcc = fourcc;
     const double own_latency_s = p.getDouble(side + "_latency_s");
-    if (!std::isfinite(own_latency_s)) {
-      throw ConfigError("parameter '" + side + "_latency_s' must be a number");
-    }
     o.latency_s = own_latency_s >= 0 ? own_latency_s : p.getDouble("latency_s");
     o.file_fps = p.getDouble("file_fps");
     o.loop = p.getBool("loop");

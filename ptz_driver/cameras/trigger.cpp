@@ -29,14 +29,17 @@ void declareTriggerParams(Params& p) {
   p.add("trigger_chip", "",
         "GPIO chip of a hardware trigger line for both cameras (name, number, /dev path or "
         "label; sim: a simulated chip; empty: no trigger, frames paired by their own times)");
-  p.add("trigger_line", -1, "", "offset of the trigger output on trigger_chip");
-  p.add("trigger_rate_hz", 30.0, "Hz", "trigger pulses a second (the cameras' frame rate)");
-  p.add("trigger_pulse_s", 0.001, "s", "how long each pulse is active");
+  p.add("trigger_line", -1, "", "offset of the trigger output on trigger_chip (-1: none)",
+        Range::between(-1, 4095));
+  p.add("trigger_rate_hz", 30.0, "Hz", "trigger pulses a second (the cameras' frame rate)",
+        Range::between(1, 1000));
+  p.add("trigger_pulse_s", 0.001, "s", "how long each pulse is active (at most half the period)",
+        Range::above(0));
   p.add("trigger_active_low", false, "pulses drive the line low (idle high)");
   p.add("trigger_window_s", 0.0, "s",
         "a frame whose capture time (grab or V4L2 buffer time minus latency) is this near a "
-        "pulse answers it "
-        "(0: a quarter of the period)");
+        "pulse answers it (0: a quarter of the period; below half the period)",
+        Range::atLeast(0));
 }
 
 TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live) {
@@ -49,23 +52,19 @@ TriggerParams triggerParamsFrom(const Params& p, const std::array<bool, 2>& live
   t.active_low = p.getBool("trigger_active_low");
   t.window_s = p.getDouble("trigger_window_s");
   t.own_latency = {p.getDouble("left_latency_s") >= 0, p.getDouble("right_latency_s") >= 0};
+  // Each number is within its declared range; what depends on another:
   if (t.line < 0) {
-    throw ConfigError("parameter 'trigger_line' must be the offset of the trigger output on '" +
-                      t.chip + "', got " + std::to_string(t.line));
-  }
-  if (!std::isfinite(t.rate_hz) || t.rate_hz < 1 || t.rate_hz > 1000) {
-    throw ConfigError("parameter 'trigger_rate_hz' must be 1..1000, got " +
-                      formatNumber(t.rate_hz));
+    throw p.invalid("trigger_line", "must be the offset of the trigger output on '" + t.chip + "'");
   }
   const double period_s = 1 / t.rate_hz;
   // At most half: a pulse whose edge came up to half a period late still ends before the next.
-  if (!std::isfinite(t.pulse_s) || t.pulse_s <= 0 || t.pulse_s > period_s / 2) {
-    throw ConfigError("parameter 'trigger_pulse_s' must be > 0 and at most half the period (" +
-                      formatNumber(period_s / 2) + " s), got " + formatNumber(t.pulse_s));
+  if (t.pulse_s > period_s / 2) {
+    throw p.invalid("trigger_pulse_s",
+                    "must be at most half the period (" + formatNumber(period_s / 2) + " s)");
   }
-  if (!std::isfinite(t.window_s) || t.window_s < 0 || t.window_s >= period_s / 2) {
-    throw ConfigError("parameter 'trigger_window_s' must be >= 0 and below half the period (" +
-                      formatNumber(period_s / 2) + " s), got " + formatNumber(t.window_s));
+  if (t.window_s >= period_s / 2) {
+    throw p.invalid("trigger_window_s",
+                    "must be below half the period (" + formatNumber(period_s / 2) + " s)");
   }
   for (size_t s = 0; s < 2; ++s) {
     if (!live[s]) {

@@ -11,11 +11,13 @@
 #include <cmath>
 #include <memory>
 
+#include "common/freshness.hpp"
 #include "common/plant.hpp"
 #include "common/transport.hpp"
 #include "ptz_driver/emulators/emulated_gpio_wiring.hpp"  // gpio_chip "sim"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "ptz_driver/heads/heads_stop.hpp"
+#include "ptz_driver/heads/slewed_command.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 
@@ -26,11 +28,15 @@ void declare(Params& p) {
   addTransportParams(p);
   addAxisLimitParams(p);  // the limits every setpoint is clamped to
   declareBackendParams(p);
-  p.add("state_rate_hz", 50.0, "Hz", "position inquiries and PTZ_STATE per second");
-  p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time");
-  p.add("deadman_s", 0.25, "s", "without a fresh setpoint for this long the heads hold");
-  p.add("max_setpoint_age_s", 0.5, "s", "setpoints published longer ago are dropped");
-  p.add("max_setpoint_rate", 3.0, "rad/s", "commanded pan/tilt change at most this fast");
+  p.add("state_rate_hz", 50.0, "Hz", "position inquiries and PTZ_STATE per second",
+        Range::between(1, 1000));
+  p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time",
+        Range::above(0));
+  p.add("deadman_s", 0.25, "s", "without a fresh setpoint for this long the heads hold",
+        Range::above(0));
+  addFreshnessParams(p, "setpoint", 500.0, "a PTZ_SETPOINT (by the capture time of its frame)");
+  p.add("max_setpoint_rate", 3.0, "rad/s", "commanded pan/tilt change at most this fast",
+        Range::above(0));
 }
 
 double clampAxis(double v, const AxisParams& a) {
@@ -46,15 +52,16 @@ class DriverNode {
         limits_(axisLimitsFrom(p)),
         inquiry_timeout_s_(p.getDouble("inquiry_timeout_s")),
         deadman_s_(p.getDouble("deadman_s")),
-        max_setpoint_age_s_(p.getDouble("max_setpoint_age_s")),
         max_setpoint_rate_(p.getDouble("max_setpoint_rate")),
+        setpoint_freshness_(freshnessFrom(p, "setpoint")),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)) {
     heads_ = makeHeads(p, openHeadLinesOrEmulated);
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, ch_setpoint_, status_,
         [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },
-        1);
+        Delivery::kNewest);
+    status_.expectInput(ch_setpoint_);
   }
 
   int run() {
@@ -74,7 +81,7 @@ class DriverNode {
                        {heads_[1]->fd(), POLLIN, 0}};
       const int wait_ms = std::max(0, static_cast<int>((next_tick - nowS()) * 1000));
       ::poll(fds, 3, wait_ms);
-      if (fds[0].revents & POLLIN) lcm_->handleTimeout(0);
+      if (fds[0].revents & POLLIN) handleNewest(*lcm_, 0);
       for (auto& h : heads_) h->receive(nowS());
       if (nowS() >= next_tick) {
         tick(period_s);
@@ -92,9 +99,12 @@ class DriverNode {
   static double nowS() { return wallUtime() * 1e-6; }
 
   void onSetpoint(const std::string& ch, const ptzstereo::ptz_setpoint_t& m) {
-    const double age_s = nowS() - m.publish_utime * 1e-6;
-    if (age_s > max_setpoint_age_s_ || age_s < -1.0) {
-      status_.countDropped(ch, "setpoint_stale");
+    const Freshness fresh =
+        judgeFreshness(m.utime, m.publish_utime, wallUtime(), setpoint_freshness_);
+    if (fresh != Freshness::kFresh) {
+      status_.countDropped(ch, std::string("setpoint_") + freshnessReason(fresh));
+      log_.warn("fresh", std::string("ptz-driver: dropped a ") + freshnessReason(fresh) +
+                             " setpoint (frame " + std::to_string(m.frame_seq) + ")");
       return;
     }
     const std::array<ptzstereo::ptz_head_setpoint_t, 2> heads = {m.left, m.right};
@@ -119,35 +129,24 @@ class DriverNode {
 
   void tick(double period_s) {
     const double now = nowS();
-    // Deadman: no fresh setpoint -> hold where the heads are, once.
+    // Deadman: no fresh setpoint -> the heads stop where they are measured, once.
     if (target_[0] && !holding_ && now - last_setpoint_s_ > deadman_s_) {
       holding_ = true;
       status_.increment("deadman_holds");
       log_.warn("deadman", "ptz-driver: no fresh setpoint; holding");
       for (size_t i = 0; i < 2; ++i) {
-        if (const auto m = heads_[i]->measured()) {
-          target_[i] = *m;
-        } else {  // where it is is unknown: stop it there
-          target_[i].reset();
-          heads_[i]->stop(now, 0.03);
+        target_[i].reset();  // the hold is the target until a fresh setpoint
+        if (!commands_[i].hold(heads_[i]->measured())) {
+          heads_[i]->stop(now, 0.03);  // where it is is unknown: stop it there
         }
       }
     }
     for (size_t i = 0; i < 2; ++i) {
+      if (target_[i]) commands_[i].setTarget(*target_[i]);
       const auto measured = heads_[i]->measured();
-      // Not before the head's position is known: slewing starts from where it is.
-      if (target_[i] && measured) {
-        PtzPose& c = commanded_[i];
-        if (!started_[i]) {
-          c = *measured;
-          started_[i] = true;
-        }
-        const double step = max_setpoint_rate_ * period_s;
-        c.pan_rad += std::clamp(target_[i]->pan_rad - c.pan_rad, -step, step);
-        c.tilt_rad += std::clamp(target_[i]->tilt_rad - c.tilt_rad, -step, step);
-        c.zoom = target_[i]->zoom;
-        heads_[i]->command(c, now);
-      } else if (target_[i]) {
+      if (const auto c = commands_[i].step(measured, period_s)) {
+        heads_[i]->command(*c, now);
+      } else if (commands_[i].hasTarget()) {
         heads_[i]->findPosition(now);
       }
       heads_[i]->inquire(now, inquiry_timeout_s_);
@@ -175,8 +174,7 @@ class DriverNode {
     msg.right = head(*r);
     msg.setpoint_utime = last_setpoint_utime_;
     msg.publish_utime = wallUtime();
-    lcm_->publish(ch_state_, &msg);
-    status_.countOut(ch_state_, (msg.publish_utime - msg.utime) / 1000.0);
+    status_.publish(ch_state_, msg, (msg.publish_utime - msg.utime) / 1000.0);
   }
 
   void report() {
@@ -226,13 +224,14 @@ class DriverNode {
   StatusReporter status_;
   RateLimitedLog log_;
   PtzPlant::Params limits_;
-  double inquiry_timeout_s_ = 0, deadman_s_ = 0, max_setpoint_age_s_ = 0, max_setpoint_rate_ = 0;
+  double inquiry_timeout_s_ = 0, deadman_s_ = 0, max_setpoint_rate_ = 0;
+  FreshnessLimits setpoint_freshness_;
   std::string ch_setpoint_, ch_state_;
   std::array<std::unique_ptr<PtzHead>, 2> heads_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
-  std::array<std::optional<PtzPose>, 2> target_;
-  std::array<PtzPose, 2> commanded_{};
-  std::array<bool, 2> started_{false, false};
+  std::array<std::optional<PtzPose>, 2> target_;  // the last fresh setpoint, until a hold
+  std::array<SlewedCommand, 2> commands_{SlewedCommand(max_setpoint_rate_),
+                                         SlewedCommand(max_setpoint_rate_)};
   double last_setpoint_s_ = 0, last_state_s_ = 0;
   int64_t last_setpoint_utime_ = 0;
   bool holding_ = false;

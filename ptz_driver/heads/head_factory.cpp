@@ -15,31 +15,40 @@ void declareBackendParams(Params& p) {
   p.add("visca_model", "",
         "backend visca_ip, visca_serial: camera model file (config/visca/*.yaml); required");
   p.add("left_host", "127.0.0.1", "backend visca_ip: left camera's IPv4 address");
-  p.add("left_port", 52381, "", "backend visca_ip: left camera's UDP port");
+  p.add("left_port", 52381, "", "backend visca_ip: left camera's UDP port",
+        Range::between(1, 65535));
   p.add("right_host", "127.0.0.1", "backend visca_ip: right camera's IPv4 address");
-  p.add("right_port", 52382, "", "backend visca_ip: right camera's UDP port");
+  p.add("right_port", 52382, "", "backend visca_ip: right camera's UDP port",
+        Range::between(1, 65535));
   p.add("left_serial_device", "/dev/ttyUSB0",
         "backend visca_serial, pelco_d: left head's serial port");
   p.add("right_serial_device", "/dev/ttyUSB0",
         "backend visca_serial, pelco_d: right head's serial port; the left's: both on one line "
         "(daisy chain, RS-485 bus)");
   p.add("serial_baud", 9600, "baud",
-        "backend visca_serial: baud rate (2400 .. 115200, the camera's)");
+        "backend visca_serial: baud rate (2400 .. 115200, the camera's)",
+        Range::between(2400, 115200));
   p.add("left_visca_address", 1, "",
-        "backend visca_serial: left camera's address (1: first on the chain)");
+        "backend visca_serial: left camera's address (1: first on the chain)",
+        Range::between(1, 7));
   p.add("right_visca_address", 0, "",
         "backend visca_serial: right camera's address; 0: 2 on the left's line, 1 on a line of "
-        "its own");
+        "its own",
+        Range::between(0, 7));
   p.add("pelco_model", "", "backend pelco_d: head model file (config/pelco_d/*.yaml); required");
-  p.add("pelco_baud", 2400, "baud", "backend pelco_d: baud rate (the heads' DIP switches)");
-  p.add("left_pelco_address", 1, "", "backend pelco_d: left head's address (DIP switches)");
-  p.add("right_pelco_address", 2, "", "backend pelco_d: right head's address (DIP switches)");
+  p.add("pelco_baud", 2400, "baud", "backend pelco_d: baud rate (the heads' DIP switches)",
+        Range::between(2400, 115200));
+  p.add("left_pelco_address", 1, "", "backend pelco_d: left head's address (DIP switches)",
+        Range::between(1, 255));
+  p.add("right_pelco_address", 2, "", "backend pelco_d: right head's address (DIP switches)",
+        Range::between(1, 255));
   p.add("pelco_position_query", false,
         "backend pelco_d: the heads answer position queries 0x51/0x53/0x55 (else the position "
         "is estimated)");
   p.add("pelco_time_constant_s", defaultPlantParams().axis[0].time_constant_s, "s",
         "backend pelco_d without position queries: time constant of the estimated motion "
-        "of every axis");
+        "of every axis",
+        Range::above(0));
   declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
 }
 
@@ -49,15 +58,6 @@ std::string required(const Params& p, const std::string& name, const std::string
   const std::string v = p.getString(name);
   if (v.empty()) throw ConfigError("parameter '" + name + "' is required with backend " + backend);
   return v;
-}
-
-int address(const Params& p, const std::string& name, int lowest, int highest) {
-  const int a = p.getInt(name);
-  if (a < lowest || a > highest) {
-    throw ConfigError("parameter '" + name + "': address " + std::to_string(a) + " is not in " +
-                      std::to_string(lowest) + ".." + std::to_string(highest));
-  }
-  return a;
 }
 
 // The lines of the two heads: one shared when both name the same device.
@@ -98,14 +98,13 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
   if (backend == "visca_serial") {
     const ViscaModel model = ViscaModel::load(required(p, "visca_model", backend));
     const bool shared = p.getString("left_serial_device") == p.getString("right_serial_device");
-    const int left = address(p, "left_visca_address", 1, 7);
-    const int right = p.getInt("right_visca_address") == 0
-                          ? (shared ? 2 : 1)
-                          : address(p, "right_visca_address", 1, 7);
+    const int left = p.getInt("left_visca_address");  // addresses and ports: ranged
+    const int right =
+        p.getInt("right_visca_address") == 0 ? (shared ? 2 : 1) : p.getInt("right_visca_address");
     if (shared && left == right) {
-      throw ConfigError(
-          "parameters 'left_visca_address' and 'right_visca_address': two cameras "
-          "on one line need two addresses");
+      throw p.invalid("right_visca_address",
+                      "must differ from left_visca_address: two cameras on one line need two "
+                      "addresses");
     }
     const auto lines = openLines<ViscaSerialLine>(p, "serial_baud");
     heads[0] = std::make_unique<ViscaSerialHead>(model, lines[0], left);
@@ -114,27 +113,25 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
   }
   if (backend == "pelco_d") {
     const PelcoModel model = PelcoModel::load(required(p, "pelco_model", backend));
-    const int left = address(p, "left_pelco_address", 1, 255);
-    const int right = address(p, "right_pelco_address", 1, 255);
+    const int left = p.getInt("left_pelco_address");
+    const int right = p.getInt("right_pelco_address");
     if (p.getString("left_serial_device") == p.getString("right_serial_device") && left == right) {
-      throw ConfigError(
-          "parameters 'left_pelco_address' and 'right_pelco_address': two heads "
-          "on one bus need two addresses");
+      throw p.invalid("right_pelco_address",
+                      "must differ from left_pelco_address: two heads on one bus need two "
+                      "addresses");
     }
     const auto lines = openLines<PelcoDLine>(p, "pelco_baud");
     const bool query = p.getBool("pelco_position_query");
     // The estimate: each axis a first-order lag within the limits, at most max_rate fast.
     PtzPlant::Params plant = axisLimitsFrom(p);
     const double time_constant_s = p.getDouble("pelco_time_constant_s");
-    if (!(time_constant_s > 0)) throw ConfigError("parameter 'pelco_time_constant_s' must be > 0");
     for (AxisParams& a : plant.axis) a.time_constant_s = time_constant_s;
     heads[0] = std::make_unique<PelcoDHead>(model, lines[0], left, query, plant);
     heads[1] = std::make_unique<PelcoDHead>(model, lines[1], right, query, plant);
     return heads;
   }
   if (backend == "gpio") return makeGpioHeads(p, open_gpio);
-  throw ConfigError("parameter 'backend': unknown backend '" + backend +
-                    "' (visca_ip, visca_serial, pelco_d, gpio)");
+  throw p.invalid("backend", "must be visca_ip, visca_serial, pelco_d or gpio");
 }
 
 }  // namespace ptz::driver

@@ -7,18 +7,27 @@
 
 namespace ptz::driver {
 
+namespace {
+// At least two strictly increasing numbers within `range`.
+std::vector<double> readIncreasing(const cv::FileNode& root, const std::string& field,
+                                   const std::string& where, const Range& range) {
+  const std::vector<double> v = readNumberList(root, field, where, range, 2);
+  for (size_t i = 1; i < v.size(); ++i) {
+    checkFieldOrder(v[i - 1], v[i], where, field + "[" + std::to_string(i - 1) + "]",
+                    field + "[" + std::to_string(i) + "]");
+  }
+  return v;
+}
+}  // namespace
+
 ZoomTable ZoomTable::read(const cv::FileNode& root, const std::string& where) {
   ZoomTable t;
-  for (const auto& n : readNode(root, "zoom_positions", where))
-    t.positions.push_back(static_cast<double>(n));
-  for (const auto& n : readNode(root, "zoom_ratios", where))
-    t.ratios.push_back(static_cast<double>(n));
-  if (t.positions.size() < 2 || t.positions.size() != t.ratios.size() ||
-      !std::is_sorted(t.positions.begin(), t.positions.end()) ||
-      !std::is_sorted(t.ratios.begin(), t.ratios.end())) {
-    throw ConfigError(where +
-                      ": fields 'zoom_positions' and 'zoom_ratios' must be increasing "
-                      "lists of the same length (at least 2)");
+  t.positions = readIncreasing(root, "zoom_positions", where, Range::between(0, 65535));
+  t.ratios = readIncreasing(root, "zoom_ratios", where, Range::above(0));
+  if (t.positions.size() != t.ratios.size()) {
+    throw ConfigError(fieldPath(where, "zoom_ratios") + ": must have as many entries as " +
+                      "zoom_positions (" + std::to_string(t.positions.size()) + "), got " +
+                      std::to_string(t.ratios.size()));
   }
   return t;
 }

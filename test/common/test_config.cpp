@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 
 #include "common/config.hpp"
 
@@ -51,16 +52,16 @@ TEST(Params, FlagsOverrideTheConfigFile) {
   EXPECT_DOUBLE_EQ(q.getDouble("rate_hz"), 12.5);
   // The README tables (--help-markdown): parameters as declared, then sections; a '|' escaped.
   ptz::Params t("prog", "test");
-  t.add("rate_hz", 30.0, "Hz", "rate");
+  t.add("rate_hz", 30.0, "Hz", "rate", ptz::Range::above(0));
   t.addSection("objects", "shape: sphere|box");
   t.addSection("chessboard", "board");
   EXPECT_EQ(
       t.markdownTable(),
-      "| parameter | unit | default | meaning |\n|---|---|---|---|\n"
-      "| `config` |  |  | YAML config file (OpenCV FileStorage); flags override its values |\n"
-      "| `rate_hz` | Hz | 30 | rate |\n"
-      "| `objects:` (section) |  |  | shape: sphere\\|box |\n"
-      "| `chessboard:` (section) |  |  | board |\n");
+      "| parameter | unit | default | range | meaning |\n|---|---|---|---|---|\n"
+      "| `config` |  |  |  | YAML config file (OpenCV FileStorage); flags override its values |\n"
+      "| `rate_hz` | Hz | 30 | > 0 | rate |\n"
+      "| `objects:` (section) |  |  |  | shape: sphere\\|box |\n"
+      "| `chessboard:` (section) |  |  |  | board |\n");
 }
 
 TEST(Params, ErrorsNameTheFileFieldOrFlag) {
@@ -78,4 +79,84 @@ TEST(Params, ErrorsNameTheFileFieldOrFlag) {
   const std::string bad = writeTemp("bad.yaml", "%YAML:1.0\n---\nframes: 2.5\n");
   err = parseError(p, {"prog", "--config", bad});
   EXPECT_NE(err.find("frames"), std::string::npos) << err;
+}
+
+TEST(Params, RangesAreCheckedAndErrorsNameTheSourceTheParameterAndTheValue) {
+  auto make = [] {
+    ptz::Params p("prog", "test");
+    p.add("rate_hz", 30.0, "Hz", "rate", ptz::Range::above(0));
+    p.add("quality", 90, "", "quality", ptz::Range::between(1, 100));
+    p.add("min_m", 0.3, "m", "nearest", ptz::Range::atLeast(0));
+    p.add("max_m", 50.0, "m", "farthest", ptz::Range::atLeast(0));
+    p.add("name", "a", "name");
+    p.addOrder("min_m", "max_m");
+    return p;
+  };
+  ptz::Params p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--rate-hz", "0"}),
+            "flag --rate-hz: parameter 'rate_hz' must be > 0, got '0'");
+  p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--quality=101"}),
+            "flag --quality: parameter 'quality' must be within 1 .. 100, got '101'");
+  const std::string cfg = writeTemp("range.yaml", "%YAML:1.0\n---\nrate_hz: -2.5\n");
+  p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--config", cfg}),
+            "config file '" + cfg + "': parameter 'rate_hz' must be > 0, got '-2.5'");
+  // Orders: after all sources, each side named with its value and source.
+  const std::string far = writeTemp("order.yaml", "%YAML:1.0\n---\nmax_m: 5.0\n");
+  p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--config", far, "--min-m", "6"}),
+            "parameter 'min_m' = 6 (flag --min-m) must be below parameter 'max_m' = 5 (config "
+            "file '" +
+                far + "')");
+  p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--config", far, "--min-m", "6", "--max-m", "7"}), "");
+  EXPECT_EQ(p.sourceOf("max_m"), "flag --max-m");
+  EXPECT_EQ(p.sourceOf("rate_hz"), "default");
+  EXPECT_EQ(std::string(p.invalid("name", "must be one of b, c").what()),
+            "default: parameter 'name' must be one of b, c, got 'a'");
+  // --help shows the range; a default outside its range is a programming error.
+  EXPECT_NE(p.usage().find("(default 30; > 0)"), std::string::npos) << p.usage();
+  EXPECT_NE(p.usage().find("(default 50; >= 0; > min_m)"), std::string::npos) << p.usage();
+  EXPECT_NE(p.markdownTable().find("| `min_m` | m | 0.3 | >= 0; < max_m | nearest |"),
+            std::string::npos)
+      << p.markdownTable();
+  ptz::Params q("prog", "test");
+  EXPECT_THROW(q.add("x", 0.0, "", "x", ptz::Range::above(0)), std::logic_error);
+  EXPECT_EQ(ptz::Range::above(0).andAtMost(1).text(), "> 0 and <= 1");
+  EXPECT_EQ(ptz::Range::atMost(3).text(), "<= 3");
+  EXPECT_EQ(ptz::Range().text(), "");
+}
+
+TEST(StructuredFiles, UnknownFieldsAndValuesOutOfRangeAreNamedWithTheirPath) {
+  const std::string path =
+      writeTemp("nested.yaml",
+                "%YAML:1.0\n---\nobjects:\n  - { name: \"a\", speed_mps: 2, radius_m: -1, "
+                "count: 2.5, color: [1, 300, 2] }\n");
+  cv::FileStorage fs = ptz::openForRead(path, "config file");
+  const cv::FileNode o = fs["objects"][0];
+  const std::string where = "config file '" + path + "', objects[0]";
+  auto error = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const ptz::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(error([&] {
+              ptz::checkFields(o, {"name", "radius_m", "count", "color"}, where);
+            }),
+            where + ".speed_mps: unknown field (known: name, radius_m, count, color)");
+  EXPECT_EQ(error([&] { ptz::checkFields(fs["objects"], {"name"}, "config file 'x', objects"); }),
+            "config file 'x', objects: must be a map of fields, got a list");
+  EXPECT_EQ(error([&] { ptz::readDouble(o, "radius_m", where, ptz::Range::above(0)); }),
+            where + ".radius_m: must be > 0, got '-1'");
+  EXPECT_EQ(error([&] { ptz::readInt(o, "count", where); }),
+            where + ".count: must be an integer, got '2.5'");
+  EXPECT_EQ(error([&] { ptz::readDouble(o, "name", where); }),
+            where + ".name: must be a number, got 'a'");
+  EXPECT_EQ(error([&] { ptz::readNumbers(o, "color", 3, where, ptz::Range::between(0, 255)); }),
+            where + ".color[1]: must be within 0 .. 255, got '300'");
+  EXPECT_EQ(ptz::fieldPath("rig file 'r.yaml'", "image_width"), "rig file 'r.yaml', image_width");
 }

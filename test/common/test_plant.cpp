@@ -5,6 +5,7 @@
 #include <limits>
 #include <random>
 
+#include "common/config.hpp"
 #include "common/plant.hpp"
 
 using ptz::AxisParams;
@@ -137,4 +138,31 @@ TEST(Plant, WholeRigCommandCountsClampedAndRejected) {
   EXPECT_NEAR(plant.pose(ptz::Side::kRight).zoom, 10.0, 1e-9);
   EXPECT_TRUE(plant.atLimit(ptz::Side::kLeft));    // tilt at +90 deg
   EXPECT_FALSE(plant.atLimit(ptz::Side::kRight));  // zoom at 10x is not a pan/tilt limit
+}
+
+// The plant's parameters: each error names the flag, the parameter and the value, not an axis.
+TEST(PlantParams, BadValuesNameTheirFlagAndValue) {
+  auto errorOf = [](std::vector<std::string> args) {
+    ptz::Params p("prog", "test");
+    ptz::addPlantParams(p);
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    try {
+      p.parse(static_cast<int>(argv.size()), argv.data());
+      ptz::plantParamsFrom(p);
+    } catch (const ptz::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(errorOf({"prog", "--dead-time-s", "-1"}),
+            "flag --dead-time-s: parameter 'dead_time_s' must be within 0 .. 60, got '-1'");
+  EXPECT_EQ(errorOf({"prog", "--zoom-min", "4", "--zoom-max", "2"}),
+            "parameter 'zoom_min' = 4 (flag --zoom-min) must be below parameter 'zoom_max' = 2 "
+            "(flag --zoom-max)");
+  EXPECT_EQ(errorOf({"prog", "--pan-time-constant-s", "0"}),
+            "flag --pan-time-constant-s: parameter 'pan_time_constant_s' must be > 0, got '0'");
+  EXPECT_EQ(errorOf({"prog", "--tilt-max-rate", "-3"}),
+            "flag --tilt-max-rate: parameter 'tilt_max_rate' must be > 0, got '-3'");
+  EXPECT_EQ(errorOf({"prog", "--dead-time-s", "0.2", "--zoom-max", "12"}), "");
 }

@@ -205,7 +205,13 @@ TEST(RigFile, BadFilesNameTheFileAndTheField) {
       {"image_width: 640", "image_wide: 640", "image_width"},
       {"zoom_table:", "zoom_tabel:", "zoom_table"},
       {"optical_centre_from_pivot_m", "optical_centre", "optical_centre_from_pivot_m"},
-      {"\nT: !!opencv-matrix\n   rows: 3", "\nT: !!opencv-matrix\n   rows: 1", "'T'"},
+      {"\nT: !!opencv-matrix\n   rows: 3", "\nT: !!opencv-matrix\n   rows: 1", ", T: must be"},
+      // Unknown fields at every level, and values out of range, named with their path and value.
+      {"image_width: 640", "image_width: 640\nimage_heigth: 480", ", image_heigth: unknown field"},
+      {"zoom_table:", "zoom_tabel: 1\n   zoom_table:", "left.zoom_tabel: unknown field"},
+      {"zoom: 1.", "zoom: 1.\n         focus: 3", "left.zoom_table[0].focus: unknown field"},
+      {"image_width: 640", "image_width: 0", "image_width: must be within 1 .. 16384, got '0'"},
+      {"zoom: 1.", "zoom: -1.", "left.zoom_table[0].zoom: must be > 0, got '-1'"},
   };
   for (const auto& c : cases) {
     std::string broken = text;

@@ -5,6 +5,7 @@
 
 #include "common/config.hpp"
 #include "sim/scene.hpp"
+#include "support/run_program.hpp"
 
 namespace {
 
@@ -50,4 +51,80 @@ TEST(SceneConfig, ObjectsAreReadAndBadOnesNamed) {
     EXPECT_NE(err.find("objects[0]"), std::string::npos) << err;
     EXPECT_NE(err.find("shape"), std::string::npos) << err;
   }
+}
+
+// Every level refuses what it does not know, and values out of range, naming path and value.
+TEST(SceneConfig, UnknownFieldsAndValuesOutOfRangeAreRefusedWithTheirPath) {
+  const std::string ball =
+      "  - { name: \"a\", class: \"red_ball\", shape: \"sphere\", radius_m: 0.1, "
+      "color_bgr: [0, 0, 200]";
+  struct Case {
+    std::string yaml, expected;
+  };
+  const std::vector<Case> cases = {
+      {"objects:\n" + ball + ", speed_mps: 2 }\n", "objects[0].speed_mps: unknown field"},
+      {"objects:\n" + ball + ", yaw_rad: 1 }\n", "objects[0].yaw_rad: unknown field"},
+      {"scene: { floor_heigth_m: 1.4 }\n", "scene.floor_heigth_m: unknown field"},
+      {"chessboard: { inner_cols: 9, inner_rows: 6, square_m: 0.1, centre: [0, 0, 2] }\n",
+       "chessboard.centre: unknown field"},
+      {"scene: 3\n", "scene: must be a map of fields, got '3'"},
+      {"objects:\n" + ball + ", period_s: -2 }\n", "objects[0].period_s: must be > 0, got '-2'"},
+      {"objects:\n  - { name: \"a\", class: \"b\", shape: \"sphere\", radius_m: 0.1, "
+       "color_bgr: [0, 256, 1] }\n",
+       "objects[0].color_bgr[1]: must be within 0 .. 255, got '256'"},
+      {"objects:\n" + ball + ", textured: 2 }\n",
+       "objects[0].textured: must be within 0 .. 1, got '2'"},
+      {"scene: { backdrop_distance_m: 0.2 }\n",
+       "scene.backdrop_distance_m: must be > 0.5, got '0.2'"},
+      {"chessboard: { inner_cols: 9, inner_rows: 1, square_m: 0.1 }\n",
+       "chessboard.inner_rows: must be within 2 .. 1000, got '1'"},
+  };
+  for (const auto& c : cases) {
+    const std::string path = writeTemp("unknown_scene.yaml", "%YAML:1.0\n---\n" + c.yaml);
+    try {
+      sceneOf(path);
+      ADD_FAILURE() << "accepted: " << c.yaml;
+    } catch (const ptz::ConfigError& e) {
+      const std::string expected = path + ", " + c.expected;  // then the known fields, if any
+      EXPECT_EQ(std::string(e.what()).substr(0, expected.size()), expected) << c.yaml;
+    }
+  }
+}
+
+// ptz-sim itself (memq://, no network): bad settings stop it with exit 2, the source, the
+// parameter and the value on one line.
+TEST(SimSettings, BadValuesNameTheirSourceParameterAndValue) {
+  auto sim = [](std::vector<std::string> args) {
+    args.insert(args.begin(), {PTZ_SIM_BIN, "--lcm-url", "memq://", "--frames", "1"});
+    return ptz::test::runProgram(args);
+  };
+  const std::string cfg = writeTemp("sim_bad.yaml", "%YAML:1.0\n---\nframe_rate_hz: 0\n");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--noise-sigma", "-1"},
+       "flag --noise-sigma: parameter 'noise_sigma' must be within 0 .. 255, got '-1'"},
+      {{"--config", cfg},
+       "config file '" + cfg + "': parameter 'frame_rate_hz' must be within 0.1 .. 1000, got '0'"},
+      {{"--dead-time-s", "-1"},
+       "flag --dead-time-s: parameter 'dead_time_s' must be within 0 .. 60, got '-1'"},
+      {{"--zoom-min", "5", "--zoom-max", "2"},
+       "parameter 'zoom_min' = 5 (flag --zoom-min) must be below parameter 'zoom_max' = 2 (flag "
+       "--zoom-max)"},
+      {{"--clock", "sundial"},
+       "flag --clock: parameter 'clock' must be realtime or lockstep, got 'sundial'"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const auto r = sim(args);
+    EXPECT_EQ(r.exit_code, 2) << expected;
+    EXPECT_EQ(r.err, "ptz-sim: " + expected + "\n");
+  }
+  const std::string objects = writeTemp(
+      "sim_objects.yaml",
+      "%YAML:1.0\n---\nobjects:\n  - { name: \"a\", class: \"red_ball\", shape: \"sphere\", "
+      "radius_m: 0.1, color_bgr: [0, 0, 200], speed_mps: 2 }\n");
+  const auto r = sim({"--config", objects});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(
+      r.err.rfind("ptz-sim: config file '" + objects + "', objects[0].speed_mps: unknown field", 0),
+      0u)
+      << r.err;
 }

@@ -2,6 +2,7 @@
 // a shell command to its end and returns what it printed.
 #pragma once
 
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -19,11 +20,20 @@ namespace ptz::test {
 
 class ChildProcess {
  public:
-  explicit ChildProcess(const std::vector<std::string>& argv) {
+  // stderr_path: the child's stderr goes to this file (empty: the test's stderr).
+  explicit ChildProcess(const std::vector<std::string>& argv, const std::string& stderr_path = "") {
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
-    if (posix_spawn(&pid_, args[0], nullptr, nullptr, args.data(), environ) != 0) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!stderr_path.empty()) {
+      posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(),
+                                       O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    }
+    const int spawned = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawned != 0) {
       pid_ = -1;
       return;
     }
@@ -39,6 +49,9 @@ class ChildProcess {
   ChildProcess& operator=(const ChildProcess&) = delete;
 
   bool started() const { return pid_ > 0; }
+  pid_t pid() const { return pid_; }
+  // Whether it still runs (it has not exited by itself).
+  bool running() { return wait(std::chrono::milliseconds(0)) < 0; }
 
   // Waits for the child to exit by itself; returns its exit code, or -1 on timeout.
   int wait(std::chrono::milliseconds timeout) {

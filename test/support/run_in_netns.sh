@@ -4,7 +4,7 @@
 # process it started dies with it, even when it crashes. Without the rights for that the test
 # reports itself skipped (exit 77), except in CI (CI set), where that is a failure unless
 # PTZ_ALLOW_SKIP=1: a green CI must have run the multi-process tests.
-if ! unshare -n -p -f true 2>/dev/null; then
+if ! unshare -n -p -f --mount-proc true 2>/dev/null; then
   echo "SKIPPED: this test needs 'unshare -n -p -f' (root or user namespaces) for a private network" >&2
   if [ -n "${CI:-}" ] && [ "${PTZ_ALLOW_SKIP:-0}" != 1 ]; then
     echo "FAILED: in CI the multi-process tests must run (set PTZ_ALLOW_SKIP=1 to allow skipping)" >&2
@@ -12,4 +12,4 @@ if ! unshare -n -p -f true 2>/dev/null; then
   fi
   exit 77
 fi
-exec unshare -n -p -f sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' sh "$@"
+exec unshare -n -p -f --mount-proc sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' sh "$@"

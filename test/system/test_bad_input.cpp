@@ -53,17 +53,6 @@ struct Outputs {
   }
 };
 
-ptzstereo::stereo_frame_t renderedFrame(int64_t seq) {
-  ptz::sim::Scene scene;
-  ptz::sim::SceneObject ball;
-  ball.name = "ball";
-  ball.class_name = "red_ball";
-  ball.color_bgr = {30, 30, 210};
-  ball.trajectory.centre_m = {0.2, 0.0, 3.0};
-  scene.objects = {ball};
-  return ptz::test::renderedFrame(scene, seq);
-}
-
 }  // namespace
 
 TEST(BadInput, DetectDropsBadFramesCountsThemAndKeepsRunning) {
@@ -76,8 +65,8 @@ TEST(BadInput, DetectDropsBadFramesCountsThemAndKeepsRunning) {
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return out.counters["ptz-detect"]["up"] > 0; }, 20s));
 
-  const ptzstereo::stereo_frame_t good = renderedFrame(1);
-  lcm.publish("STEREO_FRAME", &good);
+  const ptzstereo::stereo_frame_t good = ptz::test::ballFrame(1);
+  ptz::test::publishNow(lcm, "STEREO_FRAME", good);
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return out.poses.count(1) > 0; }, 10s));
   EXPECT_GE(out.poses[1].target_index, 0);
@@ -95,7 +84,7 @@ TEST(BadInput, DetectDropsBadFramesCountsThemAndKeepsRunning) {
   bad[3].left = ptz::encodeImage(small, ptzstereo::image_t::ENCODING_RAW, 90);
   bad[3].right = bad[3].left;
   for (size_t i = 0; i < bad.size(); ++i) {
-    lcm.publish("STEREO_FRAME", &bad[i]);
+    ptz::test::publishNow(lcm, "STEREO_FRAME", bad[i]);
     // Wait until it is counted before the next (ptz-detect keeps only the newest frame).
     ASSERT_TRUE(ptz::test::handleUntil(
         lcm, [&] { return out.dropped("ptz-detect") == static_cast<int64_t>(i + 1); }, 10s))
@@ -116,7 +105,7 @@ TEST(BadInput, DetectDropsBadFramesCountsThemAndKeepsRunning) {
 
   ptzstereo::stereo_frame_t again = good;
   again.seq = 6;
-  lcm.publish("STEREO_FRAME", &again);
+  ptz::test::publishNow(lcm, "STEREO_FRAME", again);
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return out.poses.count(6) > 0; }, 10s))
       << "ptz-detect stopped answering after bad frames";
@@ -161,7 +150,7 @@ TEST(BadInput, ControlNeverTurnsABadPoseIntoASetpoint) {
   for (const auto& p : poses) {
     const size_t before = out.setpoints.size();
     const int64_t dropped_before = out.dropped("ptz-control");
-    lcm.publish("OBJECT_POSE", &p);
+    ptz::test::publishNow(lcm, "OBJECT_POSE", p);
     ASSERT_TRUE(ptz::test::handleUntil(
         lcm,
         [&] {

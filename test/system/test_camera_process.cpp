@@ -198,8 +198,9 @@ TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
   lcm.subscribe("PROCESS_STATUS_PTZ_CAMERA", &CameraListener::onStatus, &l);
   const auto start = std::chrono::steady_clock::now();
   ChildProcess camera(cameraArgs(dir, {"--no-pair-warn-s", "1.0"}));
+  const std::string kNoPair = "no stereo pair in ";
   ASSERT_TRUE(ptz::test::handleUntil(
-      lcm, [&] { return l.message.find("no stereo pair") != std::string::npos; }, 10s))
+      lcm, [&] { return l.message.find(kNoPair) != std::string::npos; }, 20s))
       << l.message;
   const double after_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -208,7 +209,12 @@ TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
                            "or raise pair_tolerance_s"),
             std::string::npos)
       << l.message;
-  EXPECT_LE(after_s, 1.0 + 1.5) << "no_pair_warn_s 1.0 plus start-up and a status period";
+  // When: no_pair_warn_s after both sides began to deliver, by the process's own clock (the
+  // message says how long nothing paired): not before, and within a status period (0.1 s) and
+  // what a busy machine delays the loop. The start-up (seconds on a busy machine) is not in it.
+  const double quiet_s = std::stod(l.message.substr(l.message.find(kNoPair) + kNoPair.size()));
+  EXPECT_GE(quiet_s, 1.0) << l.message;
+  EXPECT_LE(quiet_s, 1.0 + 0.5) << l.message;
   ptz::test::handleUntil(
       lcm, [&] { return camera.wait(0ms) >= 0; }, 30s);
   ptz::test::drain(lcm, 300ms);
@@ -217,7 +223,8 @@ TEST(CameraProcess, ARigWhoseSidesNeverPairSaysSoWithTheOffset) {
   EXPECT_EQ(l.counters["pairs"], 0);
   EXPECT_EQ(l.counters["unmatched_left"], kFrames);
   EXPECT_EQ(l.counters["unmatched_right"], kFrames);
-  std::printf("no-pair ERROR %.2f s after start: %s\n", after_s, l.message.c_str());
+  std::printf("no-pair ERROR after %.1f s without a pair, %.2f s after the start\n", quiet_s,
+              after_s);
 }
 
 TEST(CameraProcess, AReaderStillBlockedInItsDriverAtExitIsReportedAndSkipsTheStaticDestructors) {

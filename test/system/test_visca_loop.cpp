@@ -83,7 +83,10 @@ TEST(ViscaLoop, TheDriverDropsStaleAndNonFiniteSetpoints) {
   sp.right = {0.1, 0.0, 1.0};
   sp.utime = sp.publish_utime = ptz::wallUtime() - 2'000'000;  // two seconds old
   lcm.publish("PTZ_SETPOINT", &sp);
-  sp.publish_utime = ptz::wallUtime();
+  // Counted before the next: of setpoints waiting together only the newest is judged.
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-driver"]["dropped_setpoint_stale"] == 1; }, 5s));
+  sp.utime = sp.publish_utime = ptz::wallUtime();
   sp.left.pan_rad = NAN;
   lcm.publish("PTZ_SETPOINT", &sp);
   EXPECT_TRUE(ptz::test::handleUntil(
@@ -143,4 +146,88 @@ TEST(ViscaLoop, SetpointsBeyondTheLimitsAreClampedAndTheDeadmanHolds) {
   EXPECT_LE(highest, limit + 1e-3);               // ...and not beyond
   EXPECT_NEAR(pan.back().second, at_hold, 0.05);  // held, not still driving to 10 rad
   EXPECT_EQ(driver.stop(), 0) << "SIGTERM: the driver stops the heads and exits cleanly";
+}
+
+// The deadman hold stops a moving head where it is measured. The heads run at most 1 rad/s
+// (the simulator's rate limit) while the driver's command slews at 3 rad/s, so when the
+// setpoints stop the command is far ahead of the head. Holding by slewing the command back
+// left the head driving on toward it (0.2 -> 0.48 rad, 2.1 s to settle); commanding the
+// measured pose stops it within the run-on of a measurement's age. Dead time 0: the head's
+// own stopping is its first-order lag alone, which never runs past its input.
+TEST(ViscaLoop, TheDeadmanHoldStopsAMovingHeadWhereItIsMeasured) {
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ptz::test::Listener l;
+  lcm.subscribe("PROCESS_STATUS_.*", &ptz::test::Listener::onStatus, &l);
+  struct Sample {
+    int64_t utime;
+    double left_pan, right_pan;
+  };
+  std::vector<Sample> states;
+  lcm.subscribeFunction(
+      "PTZ_STATE",
+      +[](const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::ptz_state_t* m,
+          std::vector<Sample>* out) {
+        out->push_back({m->utime, m->left.pan_rad, m->right.pan_rad});
+      },
+      &states);
+  const std::string model = kConfig + "visca/sony_srg300.yaml";
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                    kConfig + "sim_paper.yaml", "--clock", "realtime", "--encoding", "jpeg",
+                    "--duration-s", "30", "--visca-port", "52397", "--visca-model", model,
+                    "--dead-time-s", "0", "--pan-max-rate", "1.0"});
+  ChildProcess driver({PTZ_DRIVER_BIN, "--lcm-url", ptz::test::kTestUrl, "--visca-model", model,
+                       "--left-port", "52397", "--right-port", "52398", "--deadman-s", "0.25",
+                       "--max-setpoint-rate", "3.0"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return states.size() >= 10; }, 20s));
+  // Half a second of setpoints to pan +-2.5 rad: the command reaches ~1.5 rad, the heads ~0.7.
+  int64_t last_setpoint_utime = 0;
+  const auto until = std::chrono::steady_clock::now() + 500ms;
+  while (std::chrono::steady_clock::now() < until) {
+    ptzstereo::ptz_setpoint_t sp{};
+    sp.utime = sp.publish_utime = last_setpoint_utime = ptz::wallUtime();
+    sp.frame_seq = -1;
+    sp.left = {2.5, 0.0, 1.0};
+    sp.right = {-2.5, 0.0, 1.0};
+    lcm.publish("PTZ_SETPOINT", &sp);
+    lcm.handleTimeout(33);
+  }
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-driver"]["deadman_holds"] >= 1; }, 5s));
+  // 2.5 s of states after the hold began, by their own (measured) times.
+  const int64_t hold_utime = last_setpoint_utime + 250'000;
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return states.back().utime > hold_utime + 2'500'000; }, 10s));
+  EXPECT_EQ(l.counters["ptz-driver"]["deadman_holds"], 1);
+  for (int side = 0; side < 2; ++side) {
+    // Pan turned toward +x on the left, -x on the right: s makes both "forward" positive.
+    const double s = side == 0 ? 1.0 : -1.0;
+    auto pan = [&](const Sample& x) { return s * (side == 0 ? x.left_pan : x.right_pan); };
+    double at_hold = 0, furthest = -10;
+    for (const auto& x : states) {
+      if (x.utime <= hold_utime)
+        at_hold = pan(x);
+      else
+        furthest = std::max(furthest, pan(x));
+    }
+    const double settled = pan(states.back());
+    // Settled: the last time it was more than 0.01 rad from where it came to rest.
+    int64_t last_away_utime = hold_utime;
+    for (const auto& x : states) {
+      if (x.utime > hold_utime && std::abs(pan(x) - settled) > 0.01) last_away_utime = x.utime;
+    }
+    const double settle_s = static_cast<double>(last_away_utime - hold_utime) * 1e-6;
+    std::printf(
+        "%s head: pan %.3f rad at the hold, %.3f at most after it, rests at %.3f, "
+        "settled within 0.01 rad %.2f s after the hold\n",
+        side == 0 ? "left" : "right", s * at_hold, s * furthest, s * settled, settle_s);
+    EXPECT_GT(at_hold, 0.2) << "the head was moving when the hold began";
+    // At 1 rad/s, 0.1 rad is 100 ms of run-on: a measurement's age, a tick late on a busy
+    // machine, the hold's start known here to a few ms.
+    EXPECT_LE(furthest - at_hold, 0.1) << "side " << side;
+    EXPECT_NEAR(settled, at_hold, 0.1) << "side " << side;
+    // The lag's time constant is 0.24 s: from 0.1 rad to 0.01 rad in 0.55 s.
+    EXPECT_LE(settle_s, 1.0) << "side " << side;
+  }
+  EXPECT_EQ(driver.stop(), 0);
 }

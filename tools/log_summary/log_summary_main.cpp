@@ -1,10 +1,14 @@
 // ptz-log-summary: what an LCM log holds, per channel (messages, rate, size), the stereo frames'
 // sequence gaps, each process's last status counters, and the closed-loop numbers of the run
-// (tools/logs/run_metrics.hpp). Text on stdout; --json writes the run's summary.json.
+// (tools/logs/run_metrics.hpp). Text on stdout; --json writes the run's summary.json. A missing,
+// empty or foreign log, or one without the project's channels, has its own exit code
+// (tools/logs/log_reader.hpp) and writes nothing; --json and --csv are written under temporary
+// names and renamed at the end; a damaged log is summarised as far as it reads, with a warning.
 #include <lcm/lcm-cpp.hpp>
 
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "common/config.hpp"
@@ -20,53 +24,37 @@ struct ChannelStats {
   int64_t last_utime = 0;
 };
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  ptz::Params p("ptz-log-summary",
-                "Summarises an LCM log: messages, rates and sizes per channel, "
-                "stereo frame gaps, each process's last status counters and "
-                "the closed-loop numbers of the run.");
-  p.add("log", "", "the LCM log file (required)");
-  p.add("json", "", "also write the run's summary as JSON to this file");
-  p.add("channel_prefix", "", "prefix of the project's channel names");
-  p.add("target_class", "red_ball", "class of the tracked object (for centring and 3D error)");
-  p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame");
-  p.add("csv", "", "also write the heads' true pan/tilt/zoom per frame (SIM_TRUTH) to this CSV");
-  try {
-    if (!p.parse(argc, argv)) return 0;
-  } catch (const ptz::ConfigError& e) {
-    std::fprintf(stderr, "ptz-log-summary: %s\n", e.what());
-    return 2;
-  }
+// The summary; returns the exit code. Throws LogError for a log it cannot use.
+int summarise(const ptz::Params& p) {
   const std::string path = p.getString("log");
-  if (path.empty()) {
-    std::fprintf(stderr, "ptz-log-summary: --log FILE is required\n");
-    return 2;
-  }
-  lcm::LogFile log(path, "r");
-  if (!log.good()) {
-    std::fprintf(stderr, "ptz-log-summary: cannot read log '%s'\n", path.c_str());
-    return 1;
-  }
+  if (path.empty()) throw ptz::ConfigError("--log FILE is required");
+  ptz::tools::LogReader log(path);
   const std::string prefix = p.getString("channel_prefix");
   ptz::tools::RunMetrics metrics(p.getString("target_class"), p.getDouble("settle_s"));
   std::map<std::string, ChannelStats> channels;
   std::map<std::string, ptzstereo::process_status_t> last_status;
   int64_t frame_gaps = 0, last_seq = -1, undecodable = 0;
+  std::unique_ptr<ptz::tools::OutputFile> csv_file, json_file;
+  if (!p.getString("json").empty()) {
+    json_file = std::make_unique<ptz::tools::OutputFile>(p.getString("json"));
+  }
   FILE* csv = nullptr;
   if (!p.getString("csv").empty()) {
-    csv = std::fopen(p.getString("csv").c_str(), "w");
+    csv_file = std::make_unique<ptz::tools::OutputFile>(p.getString("csv"));
+    csv = std::fopen(csv_file->tempPath().c_str(), "w");
     if (!csv) {
-      std::fprintf(stderr, "ptz-log-summary: cannot write '%s'\n", p.getString("csv").c_str());
-      return 1;
+      throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
+                                 "cannot write '" + p.getString("csv") + "'");
     }
     std::fprintf(csv,
                  "t_s,frame_seq,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,"
                  "right_tilt_rad,right_zoom\n");
   }
+  // Closed on every way out (the temporary file itself is removed by csv_file).
+  const std::unique_ptr<FILE, int (*)(FILE*)> csv_closer(
+      csv, [](FILE* f) { return f ? std::fclose(f) : 0; });
   int64_t first_truth_utime = -1;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+  while (const lcm::LogEvent* ev = log.next()) {
     ChannelStats& c = channels[ev->channel];
     if (c.messages == 0) c.first_utime = ev->timestamp;
     c.last_utime = ev->timestamp;
@@ -103,7 +91,16 @@ int main(int argc, char** argv) {
       metrics.onStatus(s);
     }
   }
-  if (csv) std::fclose(csv);
+  log.requireEvents();
+  // A summary of zeros says nothing: the run's own channels must be there.
+  log.requireChannels({}, {prefix + "STEREO_FRAME", prefix + "PTZ_STATE", prefix + "PTZ_SETPOINT",
+                           prefix + "OBJECT_POSE", prefix + "SIM_TRUTH"});
+  if (!log.breaks().empty()) {
+    std::fprintf(stderr,
+                 "ptz-log-summary: warning: the log is damaged; summarised as far as it "
+                 "reads:\n%s",
+                 log.describeBreaks().c_str());
+  }
   std::printf("log %s\n", path.c_str());
   std::printf("%-32s %10s %10s %12s\n", "channel", "messages", "rate Hz", "MB");
   for (const auto& [name, c] : channels) {
@@ -115,6 +112,10 @@ int main(int argc, char** argv) {
   std::printf("stereo frames missing from the log by sequence number: %lld\n",
               static_cast<long long>(frame_gaps));
   if (undecodable) std::printf("undecodable messages: %lld\n", static_cast<long long>(undecodable));
+  if (!log.breaks().empty()) {
+    std::printf("damaged: %zu unreadable part(s), %s\n", log.breaks().size(),
+                log.truncated() ? "the log is cut off at its end" : "the log's end is whole");
+  }
   for (const auto& [process, s] : last_status) {
     std::printf("%s (last status, uptime %.1f s)%s%s\n", process.c_str(), s.uptime_s,
                 s.message.empty() ? "" : ": ", s.message.c_str());
@@ -124,15 +125,51 @@ int main(int argc, char** argv) {
   }
   const ptz::tools::RunSummary summary = metrics.summary();
   std::printf("run summary:\n%s", summary.toJson().c_str());
-  const std::string json = p.getString("json");
-  if (!json.empty()) {
-    FILE* f = std::fopen(json.c_str(), "w");
-    if (!f) {
-      std::fprintf(stderr, "ptz-log-summary: cannot write '%s'\n", json.c_str());
-      return 1;
+  if (json_file) {
+    FILE* f = std::fopen(json_file->tempPath().c_str(), "w");
+    const bool written = f && std::fputs(summary.toJson().c_str(), f) >= 0;
+    if (!f || std::fclose(f) != 0 || !written) {
+      throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
+                                 "cannot write '" + p.getString("json") + "'");
     }
-    std::fputs(summary.toJson().c_str(), f);
-    std::fclose(f);
+    json_file->commit();
   }
-  return 0;
+  if (csv_file) {
+    if (std::fflush(csv) != 0) {
+      throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
+                                 "cannot write '" + p.getString("csv") + "'");
+    }
+    csv_file->commit();
+  }
+  return ptz::tools::log_exit::kOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ptz::Params p("ptz-log-summary",
+                "Summarises an LCM log: messages, rates and sizes per channel, "
+                "stereo frame gaps, each process's last status counters and "
+                "the closed-loop numbers of the run.\n" +
+                    ptz::tools::logExitCodesHelp(""));
+  p.add("log", "", "the LCM log file (required)");
+  p.add("json", "", "also write the run's summary as JSON to this file");
+  p.add("channel_prefix", "", "prefix of the project's channel names");
+  p.add("target_class", "red_ball", "class of the tracked object (for centring and 3D error)");
+  p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame",
+        ptz::Range::atLeast(0));
+  p.add("csv", "", "also write the heads' true pan/tilt/zoom per frame (SIM_TRUTH) to this CSV");
+  try {
+    if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;
+    return summarise(p);
+  } catch (const ptz::ConfigError& e) {
+    std::fprintf(stderr, "ptz-log-summary: %s\n", e.what());
+    return ptz::tools::log_exit::kUsage;
+  } catch (const ptz::tools::LogError& e) {
+    std::fprintf(stderr, "ptz-log-summary: %s\n", e.what());
+    return e.exitCode();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ptz-log-summary: stopped: %s\n", e.what());
+    return ptz::tools::log_exit::kFailed;
+  }
 }

@@ -15,11 +15,11 @@ int main(int argc, char** argv) {
            "pose to <out>_left.png and <out>_right.png.");
   addAxisLimitParams(p);
   p.add("rig_file", "", "rig file; empty: the built-in default rig");
-  p.add("time_s", 0.0, "s", "scene time");
-  p.add("pan_rad", 0.0, "rad", "pan of both cameras");
-  p.add("tilt_rad", 0.0, "rad", "tilt of both cameras");
-  p.add("zoom", 1.0, "", "zoom ratio of both cameras");
-  p.add("noise_sigma", 2.0, "grey levels", "pixel noise");
+  p.add("time_s", 0.0, "s", "scene time", Range::atLeast(0));
+  p.add("pan_rad", 0.0, "rad", "pan of both cameras", Range::between(-6.3, 6.3));
+  p.add("tilt_rad", 0.0, "rad", "tilt of both cameras", Range::between(-6.3, 6.3));
+  p.add("zoom", 1.0, "", "zoom ratio of both cameras", Range::above(0));
+  p.add("noise_sigma", 2.0, "grey levels", "pixel noise", Range::between(0, 255));
   p.add("out", "still", "output file prefix");
   // A ptz-sim config file reads as it is; what only moves or streams does not make a still.
   for (const char* ignored : {"clock", "encoding"}) p.add(ignored, "", "ignored (ptz-sim's)");

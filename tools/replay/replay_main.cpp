@@ -2,8 +2,10 @@
 // to the real ptz-detect (started beforehand, e.g. by scripts/replay) and waits for the
 // OBJECT_POSE that answers it before the next frame, so nothing is dropped and the replay runs
 // as fast as detection. Each replayed pose is compared with the logged one of the same frame:
-// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference,
-// 3 when frames went unanswered (no ptz-detect, or it dropped them).
+// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference;
+// 3 when frames went unanswered (no ptz-detect, or it dropped them). A missing, empty or foreign
+// log, or one without frames, has its own exit code (tools/logs/log_reader.hpp); --out is
+// written under a temporary name and kept only when every frame was replayed.
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
@@ -14,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
@@ -43,124 +46,208 @@ double largestPositionChange(const ptzstereo::object_pose_t& a, const ptzstereo:
 struct Replies {
   std::map<int64_t, ptzstereo::object_pose_t> poses;  // by frame_seq
   bool detect_up = false;
-  void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
-    poses[m->frame_seq] = *m;
+  // Checked before it is decoded (a pose with a hostile count must not make the replay allocate).
+  void onPose(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    ptzstereo::object_pose_t m;
+    if (ptz::decodeChecked(rbuf->data, rbuf->data_size, &m, nullptr)) poses[m.frame_seq] = m;
   }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&) { detect_up = true; }
 };
+
+// The replay; returns the exit code. Throws LogError for a log it cannot use.
+int replay(const ptz::Params& params, lcm::LCM& lcm) {
+  using ptz::tools::log_exit::kOk;
+  const std::string path = params.getString("log");
+  if (path.empty()) throw ptz::ConfigError("--log FILE is required");
+  ptz::tools::LogReader reader(path);  // a missing log before anything else
+  std::unique_ptr<ptz::tools::OutputFile> out_file;
+  std::unique_ptr<lcm::LogFile> out;
+  if (!params.getString("out").empty()) {
+    out_file = std::make_unique<ptz::tools::OutputFile>(params.getString("out"));
+    out = std::make_unique<lcm::LogFile>(out_file->tempPath(), "w");
+    if (!out->good()) {
+      throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
+                                 "cannot write '" + params.getString("out") + "'");
+    }
+  }
+  const std::string in_prefix = params.getString("log_channel_prefix");
+  const auto timeout =
+      std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
+  Replies replies;
+  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose), &Replies::onPose, &replies);
+  lcm.subscribe(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &Replies::onStatus, &replies);
+  auto waitFor = [&](auto done) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (!done() && std::chrono::steady_clock::now() < deadline &&
+           !ptz::StopFlag::stopRequested()) {
+      lcm.handleTimeout(20);
+    }
+    return done();
+  };
+  // One pass: frames are replayed as they come, the logged poses (which follow their
+  // frames in the log) are collected, and the two compared at the end.
+  int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0, undecodable = 0;
+  double worst_m = 0;
+  std::map<int64_t, ptzstereo::object_pose_t> logged, replayed_by_seq;
+  const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
+  while (const lcm::LogEvent* ev = reader.next()) {
+    if (ptz::StopFlag::stopRequested()) break;
+    ptzstereo::object_pose_t logged_pose;
+    if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
+        ptz::tools::decodeEvent(*ev, &logged_pose, &undecodable)) {
+      logged[logged_pose.frame_seq] = logged_pose;
+      continue;
+    }
+    ptzstereo::stereo_frame_t frame;
+    if (ev->channel != in_prefix + ptz::channels::kStereoFrame ||
+        !ptz::tools::decodeEvent(*ev, &frame, &undecodable)) {
+      continue;
+    }
+    // ptz-detect is waited for at the first frame: a log without frames is its own error.
+    if (frames == 0 && !waitFor([&] { return replies.detect_up; })) {
+      std::fprintf(stderr, "ptz-replay: ptz-detect is not running on this LCM network (no %s)\n",
+                   ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT").c_str());
+      return ptz::tools::log_exit::kUnanswered;
+    }
+    ++frames;
+    // Published now, so fresh to ptz-detect's freshness rule: a capture time on the wall clock
+    // moves with the publish time (their difference kept); sim time stays as logged.
+    const int64_t now_utime = ptz::wallUtime();
+    const int64_t logged_utime = frame.utime;
+    if (ptz::captureOnWallClock(frame.utime, frame.publish_utime)) {
+      frame.utime = now_utime - ptz::saturatingDiffUs(frame.publish_utime, frame.utime);
+    }
+    frame.publish_utime = now_utime;
+    lcm.publish(frame_channel, &frame);
+    if (!waitFor([&] { return replies.poses.count(frame.seq) > 0; })) {
+      ++unanswered;
+      std::fprintf(stderr, "ptz-replay: no pose for frame %lld within the timeout\n",
+                   static_cast<long long>(frame.seq));
+      continue;
+    }
+    ptzstereo::object_pose_t& replayed = replies.poses[frame.seq];
+    replayed.utime = logged_utime;  // the frame's own capture time, as the log has it
+    if (out) {
+      std::vector<uint8_t> bytes(static_cast<size_t>(replayed.getEncodedSize()));
+      replayed.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+      lcm::LogEvent e{};
+      e.eventnum = frames - 1;
+      e.timestamp = replayed.publish_utime;
+      e.channel = ptz::channels::kObjectPose;
+      e.datalen = static_cast<int32_t>(bytes.size());
+      e.data = bytes.data();
+      out->writeEvent(&e);
+    }
+    replayed_by_seq[frame.seq] = replayed;
+    replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
+  }
+  if (ptz::StopFlag::stopRequested()) {
+    std::fprintf(stderr, "ptz-replay: stopped (signal) after %lld frames; no --out written\n",
+                 static_cast<long long>(frames));
+    return ptz::tools::log_exit::kUnanswered;
+  }
+  reader.requireEvents();
+  if (frames == 0) {
+    reader.requireChannels({in_prefix + ptz::channels::kStereoFrame});
+    throw ptz::tools::LogError(ptz::tools::log_exit::kNoChannels,
+                               "log '" + path + "': no STEREO_FRAME in it decodes");
+  }
+  for (const auto& [seq, replayed] : replayed_by_seq) {
+    const auto it = logged.find(seq);
+    if (it == logged.end()) {
+      ++not_logged;
+    } else if (canonical(it->second) == canonical(replayed)) {
+      ++identical;
+    } else {
+      ++different;
+      const double change = largestPositionChange(it->second, replayed);
+      worst_m = std::max(worst_m, change);
+      std::fprintf(stderr, "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
+                   static_cast<long long>(seq), change);
+    }
+  }
+  if (undecodable) {
+    std::fprintf(stderr, "ptz-replay: %lld undecodable messages in the log\n",
+                 static_cast<long long>(undecodable));
+  }
+  if (!reader.breaks().empty()) {
+    std::fprintf(stderr,
+                 "ptz-replay: warning: the log is damaged; replayed what could be read:\n%s",
+                 reader.describeBreaks().c_str());
+  }
+  std::printf(
+      "replayed %lld frames: %lld poses identical to the log, %lld different (largest "
+      "position change %g m), %lld unanswered, %lld without a logged pose\n",
+      static_cast<long long>(frames), static_cast<long long>(identical),
+      static_cast<long long>(different), worst_m, static_cast<long long>(unanswered),
+      static_cast<long long>(not_logged));
+  const bool check = params.getBool("check");
+  int code = kOk;
+  if (check && different > 0) {
+    code = ptz::tools::log_exit::kVerdict;  // perception changed
+  } else if (unanswered > 0 || (check && identical == 0)) {
+    code = ptz::tools::log_exit::kUnanswered;  // ptz-detect did not answer
+  }
+  if (out_file) {
+    out.reset();  // flushed and closed
+    if (unanswered > 0) {
+      std::fprintf(stderr, "ptz-replay: %lld frames unanswered: --out not written\n",
+                   static_cast<long long>(unanswered));
+    } else {
+      out_file->commit();
+    }
+  }
+  return code;
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz-replay",
                 "Replays the STEREO_FRAME messages of an LCM log through a running ptz-detect, "
-                "one frame at a time, and compares its OBJECT_POSE messages with the logged ones.");
+                "one frame at a time, and compares its OBJECT_POSE messages with the logged "
+                "ones.\n" +
+                    ptz::tools::logExitCodesHelp(
+                        "--check: a replayed pose differs from the logged one",
+                        "frames unanswered (no ptz-detect, or it dropped them; --check: also "
+                        "no logged pose to compare), or stopped by a signal"));
   ptz::addTransportParams(p);
   p.add("log", "", "the recorded LCM log (required)");
   p.add("log_channel_prefix", "", "prefix of the channel names in the log");
-  p.add("out", "", "write the replayed OBJECT_POSE messages to this LCM log");
-  p.add("timeout_s", 5.0, "s", "wait this long for each answer (and for ptz-detect to be up)");
+  p.add("out", "",
+        "write the replayed OBJECT_POSE messages to this LCM log (only when every frame was "
+        "answered)");
+  p.add("timeout_s", 5.0, "s", "wait this long for each answer (and for ptz-detect to be up)",
+        ptz::Range::above(0));
   p.add("check", false,
-        "exit 1 when a replayed pose differs from the logged one, 3 when unanswered");
-  return ptz::runProcess(argc, argv, p, [](const ptz::Params& params, lcm::LCM& lcm) {
-    const std::string path = params.getString("log");
-    if (path.empty()) throw ptz::ConfigError("--log FILE is required");
-    const std::string in_prefix = params.getString("log_channel_prefix");
-    const auto timeout =
-        std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
-    Replies replies;
-    lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose), &Replies::onPose, &replies);
-    lcm.subscribe(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &Replies::onStatus, &replies);
-    auto waitFor = [&](auto done) {
-      const auto deadline = std::chrono::steady_clock::now() + timeout;
-      while (!done() && std::chrono::steady_clock::now() < deadline &&
-             !ptz::StopFlag::stopRequested()) {
-        lcm.handleTimeout(20);
-      }
-      return done();
-    };
-    if (!waitFor([&] { return replies.detect_up; })) {
-      throw ptz::ConfigError("ptz-detect is not running on this LCM network (no " +
-                             ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT") + ")");
-    }
-    std::unique_ptr<lcm::LogFile> out;
-    if (!params.getString("out").empty()) {
-      out = std::make_unique<lcm::LogFile>(params.getString("out"), "w");
-      if (!out->good()) throw ptz::ConfigError("cannot write '" + params.getString("out") + "'");
-    }
-    // One pass: frames are replayed as they come, the logged poses (which follow their
-    // frames in the log) are collected, and the two compared at the end.
-    int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0,
-            undecodable = 0;
-    double worst_m = 0;
-    std::map<int64_t, ptzstereo::object_pose_t> logged, replayed_by_seq;
-    const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
-    ptz::tools::LogReader reader(path);
-    while (const lcm::LogEvent* ev = reader.next()) {
-      if (ptz::StopFlag::stopRequested()) break;
-      ptzstereo::object_pose_t logged_pose;
-      if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
-          ptz::tools::decodeEvent(*ev, &logged_pose, &undecodable)) {
-        logged[logged_pose.frame_seq] = logged_pose;
-        continue;
-      }
-      ptzstereo::stereo_frame_t frame;
-      if (ev->channel != in_prefix + ptz::channels::kStereoFrame ||
-          !ptz::tools::decodeEvent(*ev, &frame, &undecodable)) {
-        continue;
-      }
-      ++frames;
-      lcm.publish(frame_channel, ev->data, static_cast<unsigned>(ev->datalen));
-      if (!waitFor([&] { return replies.poses.count(frame.seq) > 0; })) {
-        ++unanswered;
-        std::fprintf(stderr, "ptz-replay: no pose for frame %lld within the timeout\n",
-                     static_cast<long long>(frame.seq));
-        continue;
-      }
-      const ptzstereo::object_pose_t& replayed = replies.poses[frame.seq];
-      if (out) {
-        std::vector<uint8_t> bytes(static_cast<size_t>(replayed.getEncodedSize()));
-        replayed.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-        lcm::LogEvent e{};
-        e.eventnum = frames - 1;
-        e.timestamp = replayed.publish_utime;
-        e.channel = ptz::channels::kObjectPose;
-        e.datalen = static_cast<int32_t>(bytes.size());
-        e.data = bytes.data();
-        out->writeEvent(&e);
-      }
-      replayed_by_seq[frame.seq] = replayed;
-      replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
-    }
-    for (const auto& [seq, replayed] : replayed_by_seq) {
-      const auto it = logged.find(seq);
-      if (it == logged.end()) {
-        ++not_logged;
-      } else if (canonical(it->second) == canonical(replayed)) {
-        ++identical;
-      } else {
-        ++different;
-        const double change = largestPositionChange(it->second, replayed);
-        worst_m = std::max(worst_m, change);
-        std::fprintf(stderr,
-                     "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
-                     static_cast<long long>(seq), change);
-      }
-    }
-    if (undecodable) {
-      std::fprintf(stderr, "ptz-replay: %lld undecodable messages in the log\n",
-                   static_cast<long long>(undecodable));
-    }
-    if (!reader.breaks().empty()) std::fputs(reader.describeBreaks().c_str(), stderr);
-    std::printf(
-        "replayed %lld frames: %lld poses identical to the log, %lld different (largest "
-        "position change %g m), %lld unanswered, %lld without a logged pose\n",
-        static_cast<long long>(frames), static_cast<long long>(identical),
-        static_cast<long long>(different), worst_m, static_cast<long long>(unanswered),
-        static_cast<long long>(not_logged));
-    if (frames == 0) throw ptz::ConfigError("no STEREO_FRAME in '" + path + "'");
-    if (!params.getBool("check")) return 0;
-    if (different > 0) return 1;                      // perception changed
-    return unanswered > 0 || identical == 0 ? 3 : 0;  // ptz-detect did not answer
-  });
+        "exit 1 when a replayed pose differs from the logged one (3 when frames are unanswered, "
+        "with or without it)");
+  // Not runProcess: its exit codes (1 for an LCM that does not open) are not these.
+  try {
+    if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;
+  } catch (const ptz::ConfigError& e) {
+    std::fprintf(stderr, "ptz-replay: %s\n", e.what());
+    return ptz::tools::log_exit::kUsage;
+  }
+  const std::string url = ptz::lcmUrl(p);
+  ptz::warnIfReceiveBufferSmall(url);
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "ptz-replay: cannot open LCM at '%s' (scripts/check-network says why)\n",
+                 url.c_str());
+    return ptz::tools::log_exit::kFailed;
+  }
+  ptz::StopFlag::install();
+  try {
+    return replay(p, lcm);
+  } catch (const ptz::tools::LogError& e) {
+    std::fprintf(stderr, "ptz-replay: %s\n", e.what());
+    return e.exitCode();
+  } catch (const ptz::ConfigError& e) {
+    std::fprintf(stderr, "ptz-replay: %s\n", e.what());
+    return ptz::tools::log_exit::kUsage;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ptz-replay: stopped: %s\n", e.what());
+    return ptz::tools::log_exit::kFailed;
+  }
 }

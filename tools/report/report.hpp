@@ -57,12 +57,13 @@ struct ReportData {
   double duration_s = 0;
 };
 
-// Reads the whole log. Throws std::runtime_error for an empty log or one without any channel a
+// Reads the whole log. Throws LogError for an empty or foreign log or one without any channel a
 // report needs (the message names the channels it has).
 ReportData collectReport(LogReader& log, const ReportOptions& options);
 
-// Writes the CSVs, PNGs (gnuplot), summary.json and report.md into dir; returns the files
-// written. Throws std::runtime_error when dir cannot be written or gnuplot fails.
+// Writes the CSVs, PNGs (gnuplot), summary.json and report.md into dir (an existing folder;
+// ptz-report gives a temporary one, see OutputDir); returns the files written. Throws
+// std::runtime_error when dir cannot be written or gnuplot fails.
 std::vector<std::string> writeReport(const ReportData& data, const std::string& log_path,
                                      const std::string& dir);
 

@@ -103,12 +103,14 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
     }
   }
   d.breaks = log.describeBreaks();
-  if (log.events() == 0) throw std::runtime_error("the log holds no events");
+  log.requireEvents();
+  const std::vector<std::string> timed = {px + channels::kStereoFrame, px + channels::kPtzState,
+                                          px + channels::kPtzSetpoint, px + channels::kSimTruth};
+  log.requireChannels({}, timed);
   if (t0 < 0) {
-    std::string have;
-    for (const auto& [name, n] : d.channel_messages) have += " " + name;
-    throw std::runtime_error("the log has none of the channels a report needs (" + px +
-                             "STEREO_FRAME, PTZ_STATE, PTZ_SETPOINT, SIM_TRUTH); it has:" + have);
+    throw LogError(log_exit::kNoChannels, "log '" + log.path() +
+                                              "': no message on STEREO_FRAME, PTZ_STATE, "
+                                              "PTZ_SETPOINT or SIM_TRUTH decodes");
   }
   d.duration_s = (last_event_us - first_event_us) * 1e-6;
   // Bins of a round width, about 50 over the run.

@@ -30,10 +30,11 @@ void writePtz(const std::string& path, const std::vector<ReportData::Ptz>& rows)
   }
 }
 
-// One gnuplot script for every figure: labelled axes with units, legends, a title each.
-std::string gnuplotScript(const ReportData& d, const std::string& dir) {
+// One gnuplot script for every figure: labelled axes with units, legends, a title each. Paths
+// are relative: the script runs inside the report folder (wherever it is moved to).
+std::string gnuplotScript(const ReportData& d) {
   std::ostringstream g;
-  const std::string q = "'" + dir + "/";
+  const std::string q = "'";
   // Fixed margins: the panels of a figure line up whatever their legends.
   g << "set terminal pngcairo size 1000,750 font 'DejaVu Sans,11' noenhanced\n"
     << "set datafile separator ','\nset grid\nset key outside right\n"
@@ -225,8 +226,8 @@ std::vector<std::string> writeReport(const ReportData& d, const std::string& log
     files.insert(files.end(), {"rates.csv", "drops.csv"});
     pngs.push_back("rates.png");
   }
-  open(dir + "/plots.gp") << gnuplotScript(d, dir);
-  if (std::system(("gnuplot '" + dir + "/plots.gp'").c_str()) != 0) {
+  open(dir + "/plots.gp") << gnuplotScript(d);
+  if (std::system(("cd '" + dir + "' && gnuplot plots.gp").c_str()) != 0) {
     throw std::runtime_error("gnuplot failed on '" + dir + "/plots.gp' (is gnuplot installed?)");
   }
   open(dir + "/summary.json") << d.summary.toJson();

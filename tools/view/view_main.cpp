@@ -32,7 +32,8 @@ class ViewNode {
         ch_frame_(channel(p, channels::kStereoFrame)) {
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
-        [this](const std::string& ch, const ptzstereo::stereo_frame_t& m) { onFrame(ch, m); }, 1);
+        [this](const std::string& ch, const ptzstereo::stereo_frame_t& m) { onFrame(ch, m); },
+        Delivery::kNewest);
     detections_ = std::make_unique<SafeSubscription<ptzstereo::object_detections_t>>(
         *lcm_, channel(p, channels::kObjectDetections), status_,
         [this](const std::string&, const ptzstereo::object_detections_t& m) {
@@ -61,7 +62,7 @@ class ViewNode {
   int run() {
     status_.publishNow();  // up and subscribed
     while (!StopFlag::stopRequested()) {
-      lcm_->handleTimeout(5);
+      handleNewest(*lcm_, 5);
       drawReady();
       status_.maybePublish();
       const int key = cv::waitKey(1) & 0xff;
@@ -106,6 +107,13 @@ class ViewNode {
     if (!complete && wallUtime() - pending_->received_us < max_wait_us_) return;
     ViewInput in;
     std::string error;
+    // The rig's size bounds what decoding may cost (a small JPEG can claim any size).
+    if (!checkFrameMatchesRig(m, rig_.left.width, rig_.left.height, &error)) {
+      status_.countDropped(ch_frame_, "size_mismatch");
+      log_.warn("size", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
+      pending_.reset();
+      return;
+    }
     if (!decodeImage(m.left, &in.left, &error) || !decodeImage(m.right, &in.right, &error) ||
         in.left.type() != CV_8UC3) {
       status_.countDropped(ch_frame_, "bad_image");
@@ -190,9 +198,11 @@ int main(int argc, char** argv) {
                 "Keys: p pause, n step, s screenshot, q quit. Needs X (or Xvfb).");
   addTransportParams(params);
   params.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
-  params.add("max_wait_s", 0.2, "s", "draw a frame without its detections after this long");
+  params.add("max_wait_s", 0.2, "s", "draw a frame without its detections after this long",
+             Range::atLeast(0));
   params.add("screenshot_dir", ".", "where the s key (and screenshot_after_frames) saves PNGs");
-  params.add("screenshot_after_frames", 0, "", "save one screenshot after this many frames");
+  params.add("screenshot_after_frames", 0, "", "save one screenshot after this many frames",
+             Range::atLeast(0));
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
     const char* display = std::getenv("DISPLAY");
     if (!display || !*display) {

@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   ptz::Params p("ptz-wait-for", "Waits until a message arrived on each of the channels named.");
   ptz::addTransportParams(p);
   p.add("channels", "", "comma-separated channel names (required)");
-  p.add("timeout_s", 20.0, "s", "give up after this long");
+  p.add("timeout_s", 20.0, "s", "give up after this long", ptz::Range::above(0));
   return ptz::runProcess(argc, argv, p, [](const ptz::Params& params, lcm::LCM& lcm) {
     std::set<std::string> wanted;
     std::stringstream list(params.getString("channels"));

@@ -24,50 +24,52 @@ const char* const kLineNames[7] = {"dir_line",       "dir2_line",      "enable_l
                                    "encoder_a_line", "encoder_b_line", "limit_min_line",
                                    "limit_max_line"};
 
-double checked(const Params& p, const std::string& name, double lo, double hi, bool lo_open) {
-  const double v = p.getDouble(name);
-  if (!std::isfinite(v) || v < lo || (lo_open && v == lo) || v > hi) {
-    throw ConfigError("parameter '" + name + "' is " + formatNumber(v) + ": it must be " +
-                      (lo_open ? "> " : ">= ") + formatNumber(lo) + " and <= " + formatNumber(hi));
-  }
-  return v;
-}
-double positive(const Params& p, const std::string& name) {
-  return checked(p, name, 0, 1e9, true);
-}
+constexpr int kMaxLine = 4095;
 
 }  // namespace
 
 void declareGpioParams(Params& p) {
   p.add("gpio_chip", "gpiochip0",
         "backend gpio: GPIO chip (name, number, /dev path or label; sim: simulated axes)");
-  p.add("pwm_hz", 1000.0, "Hz", "backend gpio: software PWM frequency of the enable lines");
-  p.add("control_hz", 500.0, "Hz", "backend gpio: position controller rate");
-  p.add("max_duty", 0.8, "", "backend gpio: largest PWM duty cycle (0..1)");
-  p.add("min_duty", 0.0, "", "backend gpio: duty the motors need to start turning");
-  p.add("homing_timeout_s", 30.0, "s", "backend gpio: homing fails after this long");
+  const Range rate = Range::above(0).andAtMost(20000);
+  p.add("pwm_hz", 1000.0, "Hz", "backend gpio: software PWM frequency of the enable lines", rate);
+  p.add("control_hz", 500.0, "Hz", "backend gpio: position controller rate", rate);
+  p.add("max_duty", 0.8, "", "backend gpio: largest PWM duty cycle", Range::above(0).andAtMost(1));
+  p.add("min_duty", 0.0, "", "backend gpio: duty the motors need to start turning",
+        Range::between(0, 1));
+  p.addOrder("min_duty", "max_duty", false);
+  p.add("homing_timeout_s", 30.0, "s", "backend gpio: homing fails after this long",
+        Range::above(0));
   p.add("homing_max_lag_rad", 0.2, "rad",
-        "backend gpio: homing fails when an axis lags its ramp by more (motor or encoder wrong)");
-  p.add("gpio_zoom", 1.0, "ratio", "backend gpio: the zoom the heads report (no zoom motor)");
+        "backend gpio: homing fails when an axis lags its ramp by more (motor or encoder wrong)",
+        Range::above(0));
+  p.add("gpio_zoom", 1.0, "ratio", "backend gpio: the zoom the heads report (no zoom motor)",
+        Range::above(0));
   p.add("coast_rad", 0.16, "rad",
         "backend gpio: how far an axis runs on when its drive is cut at full speed (speed x the "
-        "motor's time constant); the switches must lie at least this far outside the soft limits");
+        "motor's time constant); the switches must lie at least this far outside the soft limits",
+        Range::atLeast(0));
   // At least coast_rad outside the default soft limits (+-170 deg pan, -30..90 deg tilt).
   const double switch_rad[2][2] = {{-3.15, 3.15}, {-0.7, 1.75}};
   const double homing_rad_s[2] = {0.3, 0.2};
   for (int i = 0; i < 2; ++i) {
     const std::string a = i == 0 ? "pan" : "tilt";
     p.add(a + "_counts_per_rad", 1000.0, "1/rad",
-          "backend gpio: " + a + " encoder counts (x4) per radian, up toward max");
-    p.add(a + "_kp", 4.0, "1/rad", "backend gpio: " + a + " duty per radian of error");
-    p.add(a + "_kd", 0.15, "s/rad", "backend gpio: " + a + " duty per rad/s of speed (damping)");
-    p.add(a + "_deadband_rad", 0.002, "rad", "backend gpio: " + a + " error that leaves it off");
+          "backend gpio: " + a + " encoder counts (x4) per radian, up toward max", Range::above(0));
+    p.add(a + "_kp", 4.0, "1/rad", "backend gpio: " + a + " duty per radian of error",
+          Range::above(0));
+    p.add(a + "_kd", 0.15, "s/rad", "backend gpio: " + a + " duty per rad/s of speed (damping)",
+          Range::atLeast(0));
+    p.add(a + "_deadband_rad", 0.002, "rad", "backend gpio: " + a + " error that leaves it off",
+          Range::between(0, 1));
+    const Range position = Range::between(-6.3, 6.3);  // as the soft limits
     p.add(a + "_min_switch_rad", switch_rad[i][0], "rad",
-          "backend gpio: " + a + " position where the min switch closes (homing reference)");
+          "backend gpio: " + a + " position where the min switch closes (homing reference)",
+          position);
     p.add(a + "_max_switch_rad", switch_rad[i][1], "rad",
-          "backend gpio: " + a + " position where the max switch closes");
+          "backend gpio: " + a + " position where the max switch closes", position);
     p.add(a + "_homing_speed_rad_s", homing_rad_s[i], "rad/s",
-          "backend gpio: " + a + " speed toward the min switch and back to 0");
+          "backend gpio: " + a + " speed toward the min switch and back to 0", Range::above(0));
   }
   const char* const what[7] = {"direction line (high: toward max)",
                                "second direction line, not dir, for IN1/IN2 bridges (-1: none)",
@@ -80,7 +82,8 @@ void declareGpioParams(Params& p) {
     const std::string prefix = std::string(a.head) + "_" + a.axis + "_";
     for (size_t k = 0; k < 7; ++k) {
       p.add(prefix + kLineNames[k], a.lines[k], "",
-            "backend gpio: " + std::string(a.head) + " " + a.axis + " " + what[k]);
+            "backend gpio: " + std::string(a.head) + " " + a.axis + " " + what[k],
+            Range::between(k == 1 ? -1 : 0, kMaxLine));
     }
   }
 }
@@ -89,7 +92,8 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
   const PtzPlant::Params plant = axisLimitsFrom(p);
   GpioHeadConfig head;
   head.name = side;
-  head.zoom = positive(p, "gpio_zoom");
+  // The numbers are within their declared ranges; what depends on another is checked here.
+  head.zoom = p.getDouble("gpio_zoom");
   for (int i = 0; i < 2; ++i) {
     const std::string a = i == 0 ? "pan" : "tilt";
     AxisConfig& c = i == 0 ? head.pan : head.tilt;
@@ -100,39 +104,36 @@ GpioHeadConfig gpioHeadConfig(const Params& p, const std::string& side) {
     for (int k = 0; k < 7; ++k) {
       const std::string name = c.param_prefix + kLineNames[k];
       *lines[k] = p.getInt(name);
-      if (*lines[k] < (k == 1 ? -1 : 0))
-        throw ConfigError("parameter '" + name + "' must be a line offset (>= 0)");
     }
-    c.counts_per_rad = positive(p, a + "_counts_per_rad");
-    c.kp_duty_per_rad = positive(p, a + "_kp");
-    c.kd_duty_s_per_rad = checked(p, a + "_kd", 0, 1e9, false);
-    c.deadband_rad = checked(p, a + "_deadband_rad", 0, 1, false);
-    c.homing_speed_rad_s = positive(p, a + "_homing_speed_rad_s");
+    c.counts_per_rad = p.getDouble(a + "_counts_per_rad");
+    c.kp_duty_per_rad = p.getDouble(a + "_kp");
+    c.kd_duty_s_per_rad = p.getDouble(a + "_kd");
+    c.deadband_rad = p.getDouble(a + "_deadband_rad");
+    c.homing_speed_rad_s = p.getDouble(a + "_homing_speed_rad_s");
     c.soft_min_rad = plant.axis[i].min_position;
     c.soft_max_rad = plant.axis[i].max_position;
     c.min_switch_rad = p.getDouble(a + "_min_switch_rad");
     c.max_switch_rad = p.getDouble(a + "_max_switch_rad");
     // Stopped at a soft limit from full speed, an axis coasts on: it must come to rest before
     // the switch, not run through it toward the mechanical stop beyond.
-    const double coast_rad = checked(p, "coast_rad", 0, 1e9, false);
+    const double coast_rad = p.getDouble("coast_rad");
     const double margin_rad[2] = {c.soft_min_rad - c.min_switch_rad,
                                   c.max_switch_rad - c.soft_max_rad};
     for (int end = 0; end < 2; ++end) {
       if (margin_rad[end] >= coast_rad && margin_rad[end] > 0) continue;  // false for NaN
       const std::string sw = a + (end == 0 ? "_min_switch_rad" : "_max_switch_rad");
       const std::string soft = a + (end == 0 ? "_min" : "_max");
-      throw ConfigError("parameter '" + sw + "' is " + formatNumber(p.getDouble(sw)) +
-                        ": it must lie at least 'coast_rad' (" + formatNumber(coast_rad) + ") " +
-                        (end == 0 ? "below" : "above") + " the soft limit '" + soft + "' (" +
-                        formatNumber(end == 0 ? c.soft_min_rad : c.soft_max_rad) +
-                        "), so that an axis stopped there coasts to rest before the switch");
+      throw p.invalid(sw, "must lie at least 'coast_rad' (" + formatNumber(coast_rad) + ") " +
+                              (end == 0 ? "below" : "above") + " the soft limit '" + soft + "' (" +
+                              formatNumber(end == 0 ? c.soft_min_rad : c.soft_max_rad) +
+                              "), so that an axis stopped there coasts to rest before the switch");
     }
-    c.pwm_hz = checked(p, "pwm_hz", 0, 20000, true);
-    c.control_hz = checked(p, "control_hz", 0, 20000, true);
-    c.max_duty = checked(p, "max_duty", 0, 1, true);
-    c.min_duty = checked(p, "min_duty", 0, c.max_duty, false);
-    c.homing_timeout_s = positive(p, "homing_timeout_s");
-    c.homing_max_lag_rad = positive(p, "homing_max_lag_rad");
+    c.pwm_hz = p.getDouble("pwm_hz");
+    c.control_hz = p.getDouble("control_hz");
+    c.max_duty = p.getDouble("max_duty");
+    c.min_duty = p.getDouble("min_duty");
+    c.homing_timeout_s = p.getDouble("homing_timeout_s");
+    c.homing_max_lag_rad = p.getDouble("homing_max_lag_rad");
   }
   return head;
 }

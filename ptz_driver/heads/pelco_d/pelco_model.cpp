@@ -23,7 +23,10 @@ double fromHead(int centideg, int zero, int direction) {
 
 int readDirection(const cv::FileNode& root, const std::string& field, const std::string& where) {
   const int d = readInt(root, field, where);
-  if (d != 1 && d != -1) throw ConfigError(where + ": field '" + field + "' must be 1 or -1");
+  if (d != 1 && d != -1) {
+    throw ConfigError(fieldPath(where, field) + ": must be 1 or -1, got '" + std::to_string(d) +
+                      "'");
+  }
   return d;
 }
 }  // namespace
@@ -32,29 +35,31 @@ PelcoModel PelcoModel::load(const std::string& path) {
   const std::string where = "Pelco-D model file '" + path + "'";
   cv::FileStorage fs = openForRead(path, "Pelco-D model file");
   const cv::FileNode root = fs.root();
+  checkFields(root,
+              {"name", "pan_zero_centideg", "tilt_zero_centideg", "pan_direction", "tilt_direction",
+               "pan_min_deg", "pan_max_deg", "tilt_min_deg", "tilt_max_deg", "zoom_positions",
+               "zoom_ratios"},
+              where);
   PelcoModel m;
   m.name = readString(root, "name", where);
-  m.pan_zero_centideg = readInt(root, "pan_zero_centideg", where);
-  m.tilt_zero_centideg = readInt(root, "tilt_zero_centideg", where);
+  const Range centideg = Range::between(0, kTurn - 1);
+  m.pan_zero_centideg = readInt(root, "pan_zero_centideg", where, centideg);
+  m.tilt_zero_centideg = readInt(root, "tilt_zero_centideg", where, centideg);
   m.pan_direction = readDirection(root, "pan_direction", where);
   m.tilt_direction = readDirection(root, "tilt_direction", where);
-  m.pan_min_rad = readDouble(root, "pan_min_deg", where) * kDeg;
-  m.pan_max_rad = readDouble(root, "pan_max_deg", where) * kDeg;
-  m.tilt_min_rad = readDouble(root, "tilt_min_deg", where) * kDeg;
-  m.tilt_max_rad = readDouble(root, "tilt_max_deg", where) * kDeg;
-  m.zoom = ZoomTable::read(root, where);
-  if (m.pan_zero_centideg < 0 || m.pan_zero_centideg >= kTurn || m.tilt_zero_centideg < 0 ||
-      m.tilt_zero_centideg >= kTurn) {
-    throw ConfigError(where +
-                      ": fields 'pan_zero_centideg' and 'tilt_zero_centideg' must be in "
-                      "0..35999");
-  }
   // Both ends within half a turn of zero, or the angle read back is ambiguous.
-  if (!(m.pan_min_rad < m.pan_max_rad) || !(m.tilt_min_rad < m.tilt_max_rad) ||
-      m.pan_min_rad <= -M_PI || m.pan_max_rad > M_PI || m.tilt_min_rad <= -M_PI ||
-      m.tilt_max_rad > M_PI) {
-    throw ConfigError(where + ": each min below its max, all within (-180, 180] degrees");
-  }
+  const Range angle = Range::above(-180).andAtMost(180);
+  const double pan_min = readDouble(root, "pan_min_deg", where, angle);
+  const double pan_max = readDouble(root, "pan_max_deg", where, angle);
+  const double tilt_min = readDouble(root, "tilt_min_deg", where, angle);
+  const double tilt_max = readDouble(root, "tilt_max_deg", where, angle);
+  checkFieldOrder(pan_min, pan_max, where, "pan_min_deg", "pan_max_deg");
+  checkFieldOrder(tilt_min, tilt_max, where, "tilt_min_deg", "tilt_max_deg");
+  m.pan_min_rad = pan_min * kDeg;
+  m.pan_max_rad = pan_max * kDeg;
+  m.tilt_min_rad = tilt_min * kDeg;
+  m.tilt_max_rad = tilt_max * kDeg;
+  m.zoom = ZoomTable::read(root, where);
   return m;
 }
 

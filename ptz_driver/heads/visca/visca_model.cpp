@@ -11,26 +11,32 @@ ViscaModel ViscaModel::load(const std::string& path) {
   const std::string where = "VISCA model file '" + path + "'";
   cv::FileStorage fs = openForRead(path, "VISCA model file");
   const cv::FileNode root = fs.root();
+  checkFields(root,
+              {"name", "pan_nibbles", "pan_units_per_deg", "tilt_units_per_deg", "pan_min_deg",
+               "pan_max_deg", "tilt_min_deg", "tilt_max_deg", "pan_speed_max", "tilt_speed_max",
+               "zoom_positions", "zoom_ratios"},
+              where);
   ViscaModel m;
   m.name = readString(root, "name", where);
-  m.pan_nibbles = readInt(root, "pan_nibbles", where);
-  if (m.pan_nibbles != 4 && m.pan_nibbles != 5) {
-    throw ConfigError(where + ": field 'pan_nibbles' must be 4 or 5");
-  }
+  m.pan_nibbles = readInt(root, "pan_nibbles", where, Range::between(4, 5));
   const double deg = M_PI / 180;
-  m.pan_units_per_rad = readDouble(root, "pan_units_per_deg", where) / deg;
-  m.tilt_units_per_rad = readDouble(root, "tilt_units_per_deg", where) / deg;
-  m.pan_min_rad = readDouble(root, "pan_min_deg", where) * deg;
-  m.pan_max_rad = readDouble(root, "pan_max_deg", where) * deg;
-  m.tilt_min_rad = readDouble(root, "tilt_min_deg", where) * deg;
-  m.tilt_max_rad = readDouble(root, "tilt_max_deg", where) * deg;
-  m.pan_speed_max = readInt(root, "pan_speed_max", where);
-  m.tilt_speed_max = readInt(root, "tilt_speed_max", where);
+  const Range angle = Range::between(-360, 360);
+  m.pan_units_per_rad = readDouble(root, "pan_units_per_deg", where, Range::above(0)) / deg;
+  m.tilt_units_per_rad = readDouble(root, "tilt_units_per_deg", where, Range::above(0)) / deg;
+  const double pan_min = readDouble(root, "pan_min_deg", where, angle);
+  const double pan_max = readDouble(root, "pan_max_deg", where, angle);
+  const double tilt_min = readDouble(root, "tilt_min_deg", where, angle);
+  const double tilt_max = readDouble(root, "tilt_max_deg", where, angle);
+  checkFieldOrder(pan_min, pan_max, where, "pan_min_deg", "pan_max_deg");
+  checkFieldOrder(tilt_min, tilt_max, where, "tilt_min_deg", "tilt_max_deg");
+  m.pan_min_rad = pan_min * deg;
+  m.pan_max_rad = pan_max * deg;
+  m.tilt_min_rad = tilt_min * deg;
+  m.tilt_max_rad = tilt_max * deg;
+  // VISCA speeds are one byte, 1 up to the model's maximum.
+  m.pan_speed_max = readInt(root, "pan_speed_max", where, Range::between(1, 127));
+  m.tilt_speed_max = readInt(root, "tilt_speed_max", where, Range::between(1, 127));
   m.zoom = ZoomTable::read(root, where);
-  if (!(m.pan_units_per_rad > 0) || !(m.tilt_units_per_rad > 0) || m.pan_min_rad >= m.pan_max_rad ||
-      m.tilt_min_rad >= m.tilt_max_rad) {
-    throw ConfigError(where + ": units per degree must be > 0 and each min below its max");
-  }
   return m;
 }
 

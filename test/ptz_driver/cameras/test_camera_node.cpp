@@ -254,8 +254,8 @@ TEST(CameraNode, ParametersAreCheckedWithTheParameterNamed) {
     declareCameraParams(p);
     p.set("left_source", "left.avi");
     p.set("right_source", "right.avi");
-    for (const auto& [k, v] : values) p.set(k, v);
     try {
+      for (const auto& [k, v] : values) p.set(k, v);
       cameraConfigFrom(p);
     } catch (const ptz::ConfigError& e) {
       return std::string(e.what());
@@ -271,15 +271,18 @@ TEST(CameraNode, ParametersAreCheckedWithTheParameterNamed) {
   EXPECT_EQ(error({{"right_timestamps", "/nonexistent.timestamps"}}),
             "timestamps file '/nonexistent.timestamps': cannot open");
   EXPECT_EQ(error({{"pair_tolerance_s", "-0.01"}}),
-            "parameter 'pair_tolerance_s' must be >= 0.000000, got -0.010000");
+            "set: parameter 'pair_tolerance_s' must be within 0 .. 10, got '-0.01'");
   EXPECT_EQ(error({{"retry_initial_s", "0"}}),
-            "parameter 'retry_initial_s' must be > 0.000000, got 0.000000");
+            "set: parameter 'retry_initial_s' must be > 0, got '0'");
   EXPECT_EQ(error({{"retry_initial_s", "10"}}),
-            "parameter 'retry_max_s' must be at least retry_initial_s");
+            "parameter 'retry_initial_s' = 10 (set) must be at most parameter 'retry_max_s' = 8 "
+            "(default)");
   EXPECT_EQ(error({{"width", "0"}}),
-            "parameters 'width' and 'height' must both be 1..16384, or both 0");
+            "set: parameter 'width' may be 0 only when height is 0 too, got '0'");
+  EXPECT_EQ(error({{"width", "20000"}}),
+            "set: parameter 'width' must be within 0 .. 16384, got '20000'");
   EXPECT_EQ(error({{"fourcc", "MJPEG"}}),
-            "parameter 'fourcc' must be four characters (e.g. MJPG), got 'MJPEG'");
+            "set: parameter 'fourcc' must be four characters, got 'MJPEG'");
 }
 
 TEST(CameraNode, TheExampleConfigsLoad) {

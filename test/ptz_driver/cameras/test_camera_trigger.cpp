@@ -300,8 +300,8 @@ TEST(CameraTrigger, ParametersAreCheckedWithTheParameterNamed) {
     p.set("right_source", "rtsp://10.0.0.2/stream");
     p.set("trigger_chip", "gpiochip0");
     p.set("trigger_line", "17");
-    for (const auto& [k, v] : values) p.set(k, v);
     try {
+      for (const auto& [k, v] : values) p.set(k, v);
       const CameraConfig c = cameraConfigFrom(p);
       char latencies[64];
       std::snprintf(latencies, sizeof latencies, " %g %g", c.capture[0].latency_s,
@@ -320,16 +320,16 @@ TEST(CameraTrigger, ParametersAreCheckedWithTheParameterNamed) {
             "parameter 'trigger_chip' is set, but right_source is a recording: only live cameras "
             "can be triggered");
   EXPECT_EQ(error({{"trigger_line", "-1"}}),
-            "parameter 'trigger_line' must be the offset of the trigger output on 'gpiochip0', got "
-            "-1");
+            "set: parameter 'trigger_line' must be the offset of the trigger output on "
+            "'gpiochip0', got '-1'");
   EXPECT_EQ(error({{"trigger_rate_hz", "0.5"}}),
-            "parameter 'trigger_rate_hz' must be 1..1000, got 0.5");
+            "set: parameter 'trigger_rate_hz' must be within 1 .. 1000, got '0.5'");
   EXPECT_EQ(error({{"trigger_pulse_s", "0.02"}}),
-            "parameter 'trigger_pulse_s' must be > 0 and at most half the period (0.0166667 s), "
-            "got 0.02");
+            "set: parameter 'trigger_pulse_s' must be at most half the period (0.0166667 s), got "
+            "'0.02'");
   EXPECT_EQ(error({{"trigger_window_s", "0.02"}}),
-            "parameter 'trigger_window_s' must be >= 0 and below half the period (0.0166667 s), "
-            "got 0.02");
+            "set: parameter 'trigger_window_s' must be below half the period (0.0166667 s), got "
+            "'0.02'");
 }
 
 TEST(CameraTrigger, AfterTheWallClockIsSteppedBackPulsesAndFramesMatchAgain) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <random>
 
 #include "common/config.hpp"
@@ -175,6 +176,42 @@ TEST(ViscaCamera, TheModelFileGivesTheDocumentedUnits) {
   EXPECT_EQ(d70.zoomPosition(4.0), 10336);
   EXPECT_NEAR(d70.zoomRatio(d70.zoomPosition(2.5)), 2.5, 1e-3);
   EXPECT_THROW(ptz::driver::ViscaModel::load("/nonexistent.yaml"), ptz::ConfigError);
+}
+
+// A model file with one thing wrong at a time: named with the file, the field and the value.
+TEST(ViscaCamera, ABadModelFileIsRefusedNamingTheFieldAndTheValue) {
+  std::ifstream in(kSrg);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string path = ::testing::TempDir() + "visca_bad.yaml";
+  struct Case {
+    std::string from, to, expected;
+  };
+  const std::vector<Case> cases = {
+      {"pan_speed_max: 24", "pan_speed_max: 24\npan_sped_max: 3", "pan_sped_max: unknown field"},
+      {"pan_min_deg: -170.0", "pan_min_deg: 175.0",
+       "pan_min_deg = 175 must be below pan_max_deg = 170"},
+      {"pan_speed_max: 24", "pan_speed_max: 0", "pan_speed_max: must be within 1 .. 127, got '0'"},
+      {"zoom_ratios:    [1, 2, 3", "zoom_ratios:    [1, 3, 2",
+       "zoom_ratios[1] = 3 must be below zoom_ratios[2] = 2"},
+      {"zoom_positions: [0, 5638", "zoom_positions: [0, \"far\"",
+       "zoom_positions[1]: must be a number, got 'far'"},
+      {"zoom_ratios:    [1, 2, 3", "zoom_ratios:    [2, 3",
+       "zoom_ratios: must have as many entries as zoom_positions (16), got 15"},
+  };
+  for (const auto& c : cases) {
+    std::string text = good;
+    ASSERT_NE(text.find(c.from), std::string::npos) << c.from;
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    std::ofstream(path) << text;
+    std::string what;
+    try {
+      ptz::driver::ViscaModel::load(path);
+    } catch (const ptz::ConfigError& e) {
+      what = e.what();
+    }
+    const std::string expected = "VISCA model file '" + path + "', " + c.expected;
+    EXPECT_EQ(what.substr(0, expected.size()), expected) << what;
+  }
 }
 
 TEST(ViscaCamera, TheEmulatorAnswersAsTheCameraDoes) {

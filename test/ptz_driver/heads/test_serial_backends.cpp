@@ -48,9 +48,9 @@ TEST(SerialBackends, ParametersAreCheckedByName) {
   p.set("serial_baud", "9600");
   p.set("right_visca_address", "1");
   EXPECT_NE(errorOf([&] { ptz::driver::makeHeads(p); }).find("two addresses"), std::string::npos);
-  p.set("right_visca_address", "8");
-  EXPECT_EQ(errorOf([&] { ptz::driver::makeHeads(p); }),
-            "parameter 'right_visca_address': address 8 is not in 1..7");
+  EXPECT_EQ(errorOf([&] { p.set("right_visca_address", "8"); }),
+            "set: parameter 'right_visca_address' must be within 0 .. 7, got '8'");
+  p.set("right_visca_address", "0");
   p.set("backend", "pelco_d");
   p.set("pelco_model", kConfig + "pelco_d/generic.yaml");
   p.set("right_pelco_address", "1");
@@ -58,7 +58,7 @@ TEST(SerialBackends, ParametersAreCheckedByName) {
   p.set("backend", "stepper");
   EXPECT_EQ(
       errorOf([&] { ptz::driver::makeHeads(p); }),
-      "parameter 'backend': unknown backend 'stepper' (visca_ip, visca_serial, pelco_d, gpio)");
+      "set: parameter 'backend' must be visca_ip, visca_serial, pelco_d or gpio, got 'stepper'");
 }
 
 // right_visca_address 0: 2 on the left's line (a daisy chain), 1 on a line of its own.

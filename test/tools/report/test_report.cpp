@@ -133,7 +133,8 @@ TEST(Report, ATruncatedLogIsReportedAsFarAsItGoesAndSaysWhere) {
   std::ofstream(cut, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(keep));
   std::string output;
   ASSERT_EQ(runReport(cut + " --out " + tempPath("truncated.report"), &output), 0) << output;
-  EXPECT_NE(output.find("partial or unreadable event at byte"), std::string::npos) << output;
+  EXPECT_NE(output.find("partial or unreadable event (cut off) at byte"), std::string::npos)
+      << output;
   EXPECT_NE(readAll(tempPath("truncated.report/report.md")).find("The log is broken"),
             std::string::npos);
   EXPECT_FALSE(cv::imread(tempPath("truncated.report/ptz.png")).empty());
@@ -159,8 +160,8 @@ TEST(Report, AnEmptyLogOrOneWithoutTheNeededChannelsIsRefused) {
   const std::string empty = tempPath("empty.lcmlog");
   std::ofstream(empty).close();
   std::string output;
-  EXPECT_EQ(runReport(empty, &output), 1);
-  EXPECT_NE(output.find("no events"), std::string::npos) << output;
+  EXPECT_EQ(runReport(empty, &output), 5);
+  EXPECT_EQ(output, "ptz-report: log '" + empty + "' is empty (0 bytes)\n");
 
   const std::string other = tempPath("status_only.lcmlog");
   {
@@ -175,9 +176,13 @@ TEST(Report, AnEmptyLogOrOneWithoutTheNeededChannelsIsRefused) {
     ev.data = buf.data();
     log.writeEvent(&ev);
   }
-  EXPECT_EQ(runReport(other, &output), 1);
-  EXPECT_NE(output.find("none of the channels a report needs"), std::string::npos) << output;
-  EXPECT_NE(output.find("PROCESS_STATUS_SOMEONE"), std::string::npos) << output;
-  EXPECT_EQ(runReport("/nonexistent/run.lcmlog", &output), 1);
-  EXPECT_NE(output.find("cannot open log '/nonexistent/run.lcmlog'"), std::string::npos) << output;
+  EXPECT_EQ(runReport(other + " --out " + tempPath("status_only.report"), &output), 7);
+  EXPECT_EQ(output, "ptz-report: log '" + other +
+                        "' lacks the channels needed: none of STEREO_FRAME, PTZ_STATE, "
+                        "PTZ_SETPOINT, SIM_TRUTH; it has PROCESS_STATUS_SOMEONE (1)\n");
+  EXPECT_FALSE(std::ifstream(tempPath("status_only.report/report.md")).good());  // no folder
+  EXPECT_EQ(runReport("/nonexistent/run.lcmlog", &output), 4);
+  EXPECT_EQ(output, "ptz-report: log '/nonexistent/run.lcmlog': No such file or directory\n");
+  EXPECT_EQ(runReport(kFixture + " --settle-s -5", &output), 2);
+  EXPECT_EQ(output, "ptz-report: flag --settle-s: parameter 'settle_s' must be >= 0, got '-5'\n");
 }

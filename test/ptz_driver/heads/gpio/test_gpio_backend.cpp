@@ -56,8 +56,13 @@ TEST(GpioBackend, ParametersAreCheckedWithErrorsNamingThem) {
                         const std::vector<std::string>& named) {
     ptz::Params p("test", "test");
     declare(p);
-    p.set(name, value);
-    const std::string what = errorOf(p);
+    std::string what;
+    try {
+      p.set(name, value);  // a value out of its range is refused here already
+      what = errorOf(p);
+    } catch (const ConfigError& e) {
+      what = e.what();
+    }
     for (const auto& n : named) EXPECT_NE(what.find(n), std::string::npos) << what;
   };
   expectError("left_tilt_enable_line", "12", {"left_pan_enable_line", "left_tilt_enable_line"});
@@ -65,7 +70,7 @@ TEST(GpioBackend, ParametersAreCheckedWithErrorsNamingThem) {
   expectError("pan_min_switch_rad", "-2.0", {"pan_min_switch_rad", "pan_min"});
   // Closer to the soft limits than an axis coasts (pan_max 2.967, tilt_min -0.524).
   expectError("pan_max_switch_rad", "3.05",
-              {"'pan_max_switch_rad' is 3.05", "'pan_max'", "'coast_rad' (0.16)"});
+              {"'pan_max_switch_rad' must lie", "'pan_max'", "'coast_rad' (0.16)", "got '3.05'"});
   expectError("tilt_min_switch_rad", "-0.6", {"'tilt_min_switch_rad'", "'tilt_min'"});
   expectError("coast_rad", "-1", {"coast_rad"});
   expectError("max_duty", "1.5", {"max_duty"});

@@ -98,7 +98,23 @@ TEST(PelcoModel, MapsTheProjectsAnglesOntoHundredthsOfADegree) {
     std::ofstream(bad) << text;
   }
   EXPECT_EQ(errorOf(bad),
-            "Pelco-D model file '" + bad + "': field 'pan_direction' must be 1 or -1");
+            "Pelco-D model file '" + bad + "', pan_direction: must be 1 or -1, got '2'");
+  {
+    std::ifstream in(kGeneric);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("pan_max_deg: 170.0"), 18, "pan_max_deg: 190.0\npan_offset: 3");
+    std::ofstream(bad) << text;
+  }
+  const std::string unknown = "Pelco-D model file '" + bad + "', pan_offset: unknown field";
+  EXPECT_EQ(errorOf(bad).substr(0, unknown.size()), unknown);
+  {
+    std::ifstream in(kGeneric);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.replace(text.find("pan_max_deg: 170.0"), 18, "pan_max_deg: 190.0");
+    std::ofstream(bad) << text;
+  }
+  EXPECT_EQ(errorOf(bad),
+            "Pelco-D model file '" + bad + "', pan_max_deg: must be > -180 and <= 180, got '190'");
   EXPECT_NE(errorOf("/nonexistent/pelco.yaml").find("/nonexistent/pelco.yaml"), std::string::npos);
 }
 

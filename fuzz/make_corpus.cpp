@@ -1,0 +1,474 @@
+// Writes the seed corpus of every fuzz target (fuzz/corpus/<target>/): real encoded messages,
+// JPEGs encoded by OpenCV, the VISCA and Pelco-D bytes the project's own encoders and camera
+// emulators produce, the project's config, model and rig files, and small LCM logs. Deterministic;
+// `scripts/fuzz --make-corpus` runs it. Usage: ptz_fuzz_corpus SOURCE_DIR CORPUS_DIR
+#include <lcm/lcm-cpp.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <sys/stat.h>
+
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/rig.hpp"
+#include "common/transport.hpp"
+#include "ptz_driver/emulators/visca_camera_emulator.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"
+#include "ptzstereo/object_detections_t.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/point_cloud_t.hpp"
+#include "ptzstereo/process_status_t.hpp"
+#include "ptzstereo/ptz_setpoint_t.hpp"
+#include "ptzstereo/ptz_state_t.hpp"
+#include "ptzstereo/sim_truth_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+
+namespace {
+
+using ptz::driver::Bytes;
+namespace visca = ptz::driver::visca;
+namespace visca_ip = ptz::driver::visca_ip;
+namespace pelco_d = ptz::driver::pelco_d;
+
+std::string g_out;
+
+void write(const std::string& target, const std::string& name, const Bytes& bytes) {
+  const std::string dir = g_out + "/" + target;
+  ::mkdir(dir.c_str(), 0755);
+  std::ofstream f(dir + "/" + name, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  if (!f) {
+    std::fprintf(stderr, "cannot write %s/%s\n", dir.c_str(), name.c_str());
+    std::exit(1);
+  }
+}
+void write(const std::string& target, const std::string& name, const std::string& text) {
+  write(target, name, Bytes(text.begin(), text.end()));
+}
+
+Bytes readFile(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    std::fprintf(stderr, "cannot read %s\n", path.c_str());
+    std::exit(1);
+  }
+  return Bytes(std::istreambuf_iterator<char>(f), {});
+}
+
+template <class Msg>
+Bytes encode(const Msg& msg) {
+  Bytes b(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+Bytes concat(std::initializer_list<Bytes> parts) {
+  Bytes out;
+  for (const Bytes& p : parts) out.insert(out.end(), p.begin(), p.end());
+  return out;
+}
+
+// A small picture with edges and colour, as a camera would see a ball in front of a wall.
+cv::Mat picture(int width, int height, bool gray) {
+  cv::Mat bgr(height, width, CV_8UC3);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      bgr.at<cv::Vec3b>(y, x) = {static_cast<uchar>(4 * x), static_cast<uchar>(6 * y), 90};
+    }
+  }
+  cv::circle(bgr, {width / 2, height / 2}, height / 3, {30, 30, 210}, cv::FILLED);
+  if (!gray) return bgr;
+  cv::Mat g;
+  cv::cvtColor(bgr, g, cv::COLOR_BGR2GRAY);
+  return g;
+}
+
+Bytes jpeg(const cv::Mat& image, std::vector<int> params = {cv::IMWRITE_JPEG_QUALITY, 90}) {
+  Bytes b;
+  cv::imencode(".jpg", image, b, params);
+  return b;
+}
+
+void messages() {
+  using namespace ptzstereo;
+  const ptz::PtzPose left{0.2, -0.05, 2.0}, right{0.18, -0.05, 2.0};
+  const int64_t t = 1'700'000'000'000'000;
+  for (int8_t enc : {image_t::ENCODING_RAW, image_t::ENCODING_JPEG}) {
+    const std::string e = enc == image_t::ENCODING_RAW ? "raw" : "jpeg";
+    stereo_frame_t f = ptz::makeStereoFrame(t, 7, picture(32, 24, false), left,
+                                            picture(32, 24, false), right, enc, 90);
+    f.publish_utime = t + 12'000;
+    write("fuzz_stereo_frame", "bgr_" + e, encode(f));
+    f = ptz::makeStereoFrame(t, 8, picture(16, 12, true), left, picture(16, 12, true), right, enc,
+                             90);
+    write("fuzz_stereo_frame", "gray_" + e, encode(f));
+    // The frame that killed ptz-detect: the right image says GRAY8 beside a BGR left.
+    f = ptz::makeStereoFrame(t, 9, picture(16, 12, false), left, picture(16, 12, false), right, enc,
+                             90);
+    f.right.pixel_format = image_t::PIXEL_GRAY8;
+    write("fuzz_stereo_frame", "right_says_gray_" + e, encode(f));
+  }
+  stereo_frame_t rgb = ptz::makeStereoFrame(t, 10, picture(8, 6, false), left, picture(8, 6, false),
+                                            right, image_t::ENCODING_RAW, 90);
+  rgb.left.pixel_format = rgb.right.pixel_format = image_t::PIXEL_RGB8;
+  rgb.left.row_stride = rgb.right.row_stride = 8 * 3 + 4;  // padded rows
+  rgb.left.data.resize(static_cast<size_t>(rgb.left.row_stride * 6));
+  rgb.right.data = rgb.left.data;
+  rgb.left.data_size = rgb.right.data_size = static_cast<int32_t>(rgb.left.data.size());
+  write("fuzz_stereo_frame", "rgb_padded_rows", encode(rgb));
+  // The 2 GB data_size: the count kept, the data cut to what a datagram holds.
+  Bytes huge = encode(rgb);
+  const size_t data_size_at = 8 + 3 * 8 + 3 * 4 + 2 + 3 * 8;
+  for (int i = 0; i < 4; ++i) huge[data_size_at + static_cast<size_t>(i)] = i == 0 ? 0x7F : 0xFF;
+  write("fuzz_stereo_frame", "data_size_2g", huge);
+
+  object_detections_t d{};
+  d.utime = t;
+  d.publish_utime = t + 20'000;
+  d.frame_seq = 7;
+  detection_2d_t det{"red_ball", 320.5, 240.25, 1200, 300, 220, 41, 40, 0.02, 0};
+  d.left = {det, det};
+  d.left[1].class_name = "blue_ball";
+  d.left[1].match_index = -1;
+  d.right = {det};
+  d.num_left = 2;
+  d.num_right = 1;
+  write("fuzz_object_detections", "two_left_one_right", encode(d));
+  d.left.clear();
+  d.right.clear();
+  d.num_left = d.num_right = 0;
+  write("fuzz_object_detections", "none", encode(d));
+
+  object_pose_t p{};
+  p.utime = t;
+  p.publish_utime = t + 21'000;
+  p.frame_seq = 7;
+  p.left_ptz = {0.2, -0.05, 2.0};
+  p.right_ptz = {0.18, -0.05, 2.0};
+  p.target_index = 0;
+  object_3d_t o{};
+  o.class_name = "red_ball";
+  o.position_m[0] = 0.1;
+  o.position_m[1] = -0.2;
+  o.position_m[2] = 3.0;
+  for (int i = 0; i < 9; i += 4) o.covariance_m2[i] = 1e-4;
+  o.radius_m = 0.1;
+  p.objects = {o, o};
+  p.objects[1].class_name = "green_box";
+  p.num_objects = 2;
+  write("fuzz_object_pose", "two_objects", encode(p));
+  // The 10 000 000 objects in a small message.
+  Bytes many = encode(p);
+  const size_t count_at = 8 + 3 * 8 + 2 * 3 * 8 + 4;
+  const int32_t n = 10'000'000;
+  for (int i = 0; i < 4; ++i)
+    many[count_at + static_cast<size_t>(i)] = static_cast<uint8_t>(n >> (24 - 8 * i));
+  write("fuzz_object_pose", "num_objects_10m", many);
+
+  point_cloud_t c{};
+  c.utime = t;
+  c.frame_seq = 7;
+  c.frame_id = "left_camera";
+  c.width = 4;
+  c.height = 1;
+  c.is_dense = 1;
+  for (const char* name : {"x", "y", "z"}) {
+    point_field_t field{};
+    field.name = name;
+    field.offset = static_cast<int32_t>(4 * c.fields.size());
+    field.datatype = point_field_t::FLOAT32;
+    field.count = 1;
+    c.fields.push_back(field);
+  }
+  c.num_fields = 3;
+  c.point_step = 12;
+  c.row_step = 48;
+  c.data.assign(48, 0);
+  for (size_t i = 0; i < 48; i += 4) c.data[i + 3] = 0x3F;
+  c.data_size = 48;
+  write("fuzz_point_cloud", "four_points", encode(c));
+
+  process_status_t s{};
+  s.utime = t;
+  s.process = "ptz-detect";
+  s.hostname = "rig";
+  s.pid = 4242;
+  s.uptime_s = 12.5;
+  s.state = process_status_t::STATE_WARN;
+  s.message = "STEREO_FRAME absent for 1.2 s";
+  channel_status_t ch{"STEREO_FRAME", channel_status_t::DIRECTION_IN, 29.8, 600, 2, 3.1, 7.9};
+  s.channels = {ch, ch};
+  s.channels[1].channel = "OBJECT_POSE";
+  s.channels[1].direction = channel_status_t::DIRECTION_OUT;
+  s.num_channels = 2;
+  s.counters = {{"frames_processed", 598}, {"dropped_undecodable", 1}, {"seq_gap", 1}};
+  s.num_counters = 3;
+  write("fuzz_process_status", "detect_warn", encode(s));
+
+  ptz_setpoint_t sp{};
+  sp.utime = t;
+  sp.publish_utime = t + 22'000;
+  sp.frame_seq = 7;
+  sp.left = {0.21, -0.04, 2.1};
+  sp.right = {0.19, -0.04, 2.1};
+  write("fuzz_ptz_setpoint", "tracking", encode(sp));
+  sp.publish_utime = std::numeric_limits<int64_t>::min();  // the overflow
+  sp.left.pan_rad = std::nan("");
+  write("fuzz_ptz_setpoint", "int64_min_and_nan", encode(sp));
+
+  ptz_state_t st{};
+  st.utime = t;
+  st.publish_utime = t + 100;
+  st.left = {0.2, -0.05, 2.0, 0.01, 0.0, 0.0, 0};
+  st.right = {0.18, -0.05, 2.0, 0.01, 0.0, 0.0, 1};
+  st.setpoint_utime = t - 10'000;
+  write("fuzz_ptz_state", "moving", encode(st));
+
+  sim_truth_t tr{};
+  tr.utime = t;
+  tr.frame_seq = 7;
+  tr.left_head = st.left;
+  tr.right_head = st.right;
+  tr.left_camera.width = tr.right_camera.width = 640;
+  tr.left_camera.height = tr.right_camera.height = 480;
+  tr.left_camera.fx_px = tr.left_camera.fy_px = 1000;
+  tr.left_camera.rotation_head_camera[0] = tr.left_camera.rotation_head_camera[4] = 1;
+  tr.left_camera.rotation_head_camera[8] = 1;
+  tr.right_camera = tr.left_camera;
+  sim_object_truth_t ot{"ball", "red_ball", "sphere", {0.1, 0.2, 3}, {0.3, 0, 0}, 0.1};
+  tr.objects = {ot, ot};
+  tr.objects[1].name = "box";
+  tr.objects[1].shape = "box";
+  tr.num_objects = 2;
+  write("fuzz_sim_truth", "two_objects", encode(tr));
+}
+
+void jpegs() {
+  auto with = [](int8_t pixel_format, int width, int height, const Bytes& data) {
+    Bytes b = {static_cast<uint8_t>(pixel_format), static_cast<uint8_t>(width >> 8),
+               static_cast<uint8_t>(width), static_cast<uint8_t>(height >> 8),
+               static_cast<uint8_t>(height)};
+    b.insert(b.end(), data.begin(), data.end());
+    return b;
+  };
+  using ptzstereo::image_t;
+  write("fuzz_jpeg", "bgr_q90", with(image_t::PIXEL_BGR8, 32, 24, jpeg(picture(32, 24, false))));
+  write("fuzz_jpeg", "rgb_q50",
+        with(image_t::PIXEL_RGB8, 24, 16,
+             jpeg(picture(24, 16, false), {cv::IMWRITE_JPEG_QUALITY, 50})));
+  write("fuzz_jpeg", "gray", with(image_t::PIXEL_GRAY8, 16, 16, jpeg(picture(16, 16, true))));
+  write("fuzz_jpeg", "progressive",
+        with(image_t::PIXEL_BGR8, 32, 24,
+             jpeg(picture(32, 24, false), {cv::IMWRITE_JPEG_PROGRESSIVE, 1})));
+  write("fuzz_jpeg", "optimized_restarts",
+        with(image_t::PIXEL_BGR8, 40, 8,
+             jpeg(picture(40, 8, false),
+                  {cv::IMWRITE_JPEG_OPTIMIZE, 1, cv::IMWRITE_JPEG_RST_INTERVAL, 1})));
+  // The JPEG whose header says more than the message.
+  write("fuzz_jpeg", "header_larger_than_message",
+        with(image_t::PIXEL_BGR8, 16, 12, jpeg(picture(32, 24, false))));
+}
+
+void visca_bytes() {
+  for (int nibbles : {4, 5}) {
+    ptz::driver::ViscaModel m;
+    m.pan_nibbles = nibbles;
+    m.pan_units_per_rad = m.tilt_units_per_rad = (nibbles == 5 ? 51.2 : 13.335) * 180 / M_PI;
+    m.pan_min_rad = -3;
+    m.pan_max_rad = 3;
+    m.tilt_min_rad = -0.5;
+    m.tilt_max_rad = 1.5;
+    m.zoom.positions = {0, 16384};
+    m.zoom.ratios = {1, 20};
+    const ptz::driver::ViscaCameraEmulator camera(m, 1);
+    const ptz::PtzPose now{-0.7, 0.3, 4.0};
+    const std::vector<Bytes> commands = {
+        visca::panTiltAbsolute(1, 24, 20, m.panUnits(-0.7), m.tiltUnits(0.3), nibbles),
+        visca::panTiltStop(1, 24, 20),
+        visca::zoomDirect(1, m.zoomPosition(4.0)),
+        visca::zoomStop(1),
+        visca::panTiltPositionInquiry(1),
+        visca::zoomPositionInquiry(1),
+        {0x81, 0x01, 0x7E, 0xFF}};  // a command the camera does not know
+    const std::string n = std::to_string(nibbles);
+    Bytes stream;
+    for (size_t i = 0; i < commands.size(); ++i) {
+      ptz::driver::ViscaTarget target;
+      Bytes replies;
+      for (const Bytes& r : camera.handle(commands[i], now, &target)) {
+        replies.insert(replies.end(), r.begin(), r.end());
+      }
+      const std::string name = n + "nibbles_" + std::to_string(i);
+      // What the driver reads (one byte: piece size), and what the camera reads.
+      write("fuzz_visca", "serial_" + name, concat({{static_cast<uint8_t>(i)}, replies}));
+      write("fuzz_visca", "ip_" + name,
+            concat({{0x07}, visca_ip::wrap(visca_ip::kReply, static_cast<uint32_t>(i), replies)}));
+      const uint8_t mode = nibbles == 5 ? 1 : 0;
+      write("fuzz_visca_camera", "serial_" + name, concat({{mode}, commands[i]}));
+      const uint16_t type = commands[i][1] == 0x09 ? visca_ip::kInquiry : visca_ip::kCommand;
+      write("fuzz_visca_camera", "ip_" + name,
+            concat({{mode}, visca_ip::wrap(type, static_cast<uint32_t>(100 + i), commands[i])}));
+      stream.insert(stream.end(), replies.begin(), replies.end());
+    }
+    // A serial line: replies back to back, noise in between, the broadcasts coming round.
+    write("fuzz_visca", "serial_stream_" + n,
+          concat({{0x03},
+                  {0x00, 0x13},
+                  stream,
+                  visca::addressSet(),
+                  {0x88, 0x30, 0x03, 0xFF},
+                  visca::ifClear(),
+                  {0xFF, 0xFF}}));
+  }
+  write("fuzz_visca", "ip_control_reply",
+        concat({{0x01}, visca_ip::wrap(visca_ip::kControlReply, 0, {0x01})}));
+  write("fuzz_visca_camera", "chain_address_set_and_clear",
+        concat({{0x00}, visca::addressSet(), visca::ifClear(), visca::panTiltPositionInquiry(2)}));
+  write("fuzz_visca_camera", "ip_reset", concat({{0x01}, visca_ip::resetSequence(5)}));
+}
+
+void pelco_bytes() {
+  write("fuzz_pelco_d", "pan_reply", concat({{0x06}, pelco_d::frame(1, 0, 0x59, 0x46, 0x50)}));
+  write("fuzz_pelco_d", "tilt_zoom_replies",
+        concat({{0x02},
+                pelco_d::frame(1, 0, 0x5B, 0x88, 0xB8),
+                pelco_d::frame(2, 0, 0x5D, 0, 0x80),
+                pelco_d::frame(1, 0, 0, 0, 0)}));
+  write("fuzz_pelco_d", "noise_and_bad_checksum",
+        concat({{0x00},
+                {0x12, 0xFF, 0x01, 0x00},
+                {0xFF, 0x01, 0x00, 0x59, 0x10, 0x00, 0x00},
+                pelco_d::frame(1, 0, 0x59, 0x10, 0x00)}));
+  write("fuzz_pelco_d", "commands",
+        concat({{0x1F},
+                pelco_d::setPanPosition(1, 12000),
+                pelco_d::setTiltPosition(1, 35000),
+                pelco_d::setZoomPosition(2, 30000),
+                pelco_d::queryPan(1),
+                pelco_d::queryTilt(2),
+                pelco_d::queryZoom(1),
+                pelco_d::panTilt(1, 20, -10),
+                pelco_d::stop(2)}));
+}
+
+void files(const std::string& source) {
+  const std::string config = source + "/config/";
+  for (const char* f : {"sim_default.yaml", "sim_paper.yaml", "detect_default.yaml",
+                        "control_paper.yaml", "driver_visca_ip.yaml"}) {
+    write("fuzz_config", f, readFile(config + f));
+  }
+  for (const char* f : {"sim_default.yaml", "sim_paper.yaml"}) {
+    write("fuzz_scene", f, readFile(config + f));
+  }
+  write("fuzz_config", "every_parameter.yaml",
+        "%YAML:1.0\n---\nlcm_url: \"memq://\"\nchannel_prefix: \"SIM_\"\nstatus_period_s: 1.0\n"
+        "dead_time_s: 0.1\nplant_step_s: 0.001\npan_gain: 1.7\npan_time_constant_s: 0.24\n"
+        "pan_min: -2.9\npan_max: 2.9\npan_max_rate: 5.2\ntilt_min: -0.5\ntilt_max: 1.5\n"
+        "zoom_min: 1\nzoom_max: 10\nencoding: \"jpeg\"\njpeg_quality: 80\n"
+        "setpoint_max_age_ms: 300\nsetpoint_future_tolerance_ms: 50\nrig_file: \"\"\n"
+        "frames: 100\nframe_rate_hz: 60.0\nmin_range_m: 0.3\nmax_range_m: 12\nshow: true\n"
+        "objects:\n  - { name: \"a\" }\n");
+  write("fuzz_config", "every_parameter.json",
+        "{\n  \"frames\": 3,\n  \"frame_rate_hz\": 15.5,\n  \"show\": \"off\",\n"
+        "  \"encoding\": \"raw\",\n  \"pan_min\": -1,\n  \"pan_max\": 1\n}\n");
+  write("fuzz_config", "every_parameter.xml",
+        "<?xml version=\"1.0\"?>\n<opencv_storage>\n<frames>3</frames>\n"
+        "<frame_rate_hz>15.5</frame_rate_hz>\n<encoding>raw</encoding>\n</opencv_storage>\n");
+  write(
+      "fuzz_scene", "every_shape_and_board.yaml",
+      "%YAML:1.0\n---\nscene:\n  backdrop_distance_m: 6.0\n  floor_height_m: 1.2\n"
+      "  texture_m_per_texel: 0.02\n  texture_seed: 3\nobjects:\n"
+      "  - { name: \"b\", class: \"green_box\", shape: \"box\", half_extents_m: [0.1, 0.2, 0.3],\n"
+      "      yaw_rad: 0.3, color_bgr: [0, 200, 0], textured: 1, trajectory: \"circle\",\n"
+      "      centre_m: [0, 0, 3], amplitude_m: [1, 0, 1], period_s: 10, phase_rad: 1 }\n"
+      "  - { name: \"w\", class: \"red_ball\", shape: \"sphere\", radius_m: 0.1,\n"
+      "      color_bgr: [0, 0, 200], trajectory: \"random_walk\", seed: 5,\n"
+      "      amplitude_m: [0.5, 0.1, 0.5] }\n"
+      "  - { name: \"l\", class: \"red_ball\", shape: \"sphere\", radius_m: 0.2,\n"
+      "      color_bgr: [0, 0, 200], trajectory: \"line\", amplitude_m: [0.5, 0, 0] }\n"
+      "chessboard:\n  inner_cols: 9\n  inner_rows: 6\n  square_m: 0.05\n"
+      "  centre_m: [0, 0, 2]\n  rotation_vector: [0.1, 0.2, 0]\n");
+  for (const char* f : {"sony_evi_d70.yaml", "sony_srg300.yaml"}) {
+    write("fuzz_visca_model", f, readFile(config + "visca/" + f));
+  }
+  write("fuzz_pelco_model", "generic.yaml", readFile(config + "pelco_d/generic.yaml"));
+
+  // Rig files as ptz-calibrate writes them (through a scratch file: save() takes a path).
+  const std::string scratch = g_out + "/.rig-scratch.yaml";
+  ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+  rig.save(scratch);
+  write("fuzz_rig", "default.yaml", readFile(scratch));
+  rig.left.zoom_table.resize(1);
+  rig.right.zoom_table.resize(1);
+  rig.save(scratch, [](cv::FileStorage& fs) {
+    fs << "calibration"
+       << "{"
+       << "rms_px" << 0.31 << "pairs" << 13 << "}";
+  });
+  write("fuzz_rig", "one_zoom_with_report.yaml", readFile(scratch));
+  std::remove(scratch.c_str());
+}
+
+void logs() {
+  using namespace ptzstereo;
+  const std::string scratch = g_out + "/.log-scratch.lcmlog";
+  auto event = [](lcm::LogFile& log, int64_t n, const char* channel, const Bytes& data) {
+    lcm::LogEvent ev{};
+    ev.eventnum = n;
+    ev.timestamp = 1'700'000'000'000'000 + n * 33'333;
+    ev.channel = channel;
+    ev.datalen = static_cast<int32_t>(data.size());
+    ev.data = const_cast<uint8_t*>(data.data());
+    log.writeEvent(&ev);
+  };
+  ptz_state_t st{};
+  st.left.zoom = st.right.zoom = 1;
+  ptz_setpoint_t sp{};
+  sp.left.zoom = sp.right.zoom = 1.5;
+  process_status_t s{};
+  s.process = "ptz-sim";
+  s.hostname = "h";
+  s.message = "ok";
+  stereo_frame_t f = ptz::makeStereoFrame(1, 1, picture(8, 6, false), {}, picture(8, 6, false), {},
+                                          image_t::ENCODING_JPEG, 50);
+  {
+    lcm::LogFile log(scratch, "w");
+    event(log, 0, "PTZ_STATE", encode(st));
+    event(log, 1, "STEREO_FRAME", encode(f));
+    event(log, 2, "PTZ_SETPOINT", encode(sp));
+    event(log, 3, "PROCESS_STATUS_PTZ_SIM", encode(s));
+  }
+  const Bytes whole = readFile(scratch);
+  write("fuzz_log_reader", "four_events", whole);
+  write("fuzz_log_reader", "truncated", Bytes(whole.begin(), whole.end() - 9));
+  Bytes damaged = whole;
+  damaged.insert(damaged.begin() + 40, {0xDE, 0xAD, 0xBE, 0xEF, 0xED, 0xA1});
+  write("fuzz_log_reader", "garbage_between_events", damaged);
+  std::remove(scratch.c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: %s SOURCE_DIR CORPUS_DIR\n", argv[0]);
+    return 2;
+  }
+  g_out = argv[2];
+  ::mkdir(g_out.c_str(), 0755);
+  messages();
+  jpegs();
+  visca_bytes();
+  pelco_bytes();
+  files(argv[1]);
+  logs();
+  return 0;
+}

@@ -1,0 +1,233 @@
+#include "tools/health/health.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace ptz::health {
+
+using Status = ptzstereo::process_status_t;
+
+const char* verdictName(Verdict v) {
+  switch (v) {
+    case Verdict::kOk:
+      return "OK";
+    case Verdict::kWarn:
+      return "WARN";
+    case Verdict::kError:
+      return "ERROR";
+    case Verdict::kStale:
+      return "STALE";
+    case Verdict::kMissing:
+      return "MISSING";
+  }
+  return "?";
+}
+
+Board::Board(Options options) : options_(std::move(options)) {}
+
+void Board::onStatus(const Status& msg, int64_t receive_utime) {
+  const auto key = std::make_pair(msg.process, msg.hostname);
+  auto it = entries_.find(key);
+  if (it == entries_.end()) {
+    if (entries_.size() >= options_.max_processes) {
+      ++ignored_;
+      return;
+    }
+    entries_.emplace(key, Entry{msg, receive_utime, 0});
+    return;
+  }
+  if (it->second.status.pid != msg.pid) ++it->second.pid_changes;
+  it->second.status = msg;
+  it->second.receive_utime = receive_utime;
+}
+
+namespace {
+
+Verdict fromState(int8_t state) {
+  if (state == Status::STATE_OK) return Verdict::kOk;
+  if (state == Status::STATE_WARN) return Verdict::kWarn;
+  return Verdict::kError;  // ERROR, and any value a process should not send
+}
+
+std::vector<InputChannel> inputsOf(const Status& s) {
+  std::vector<InputChannel> inputs;
+  for (const auto& c : s.channels) {
+    if (c.direction != ptzstereo::channel_status_t::DIRECTION_IN) continue;
+    InputChannel in;
+    in.channel = c.channel;
+    in.rate_hz = c.rate_hz;
+    in.dropped = c.dropped;
+    const std::string prefix = c.channel + ".dropped_";
+    for (const auto& counter : s.counters) {
+      if (counter.name.size() > prefix.size() &&
+          counter.name.compare(0, prefix.size(), prefix) == 0 && counter.value != 0) {
+        in.dropped_by_reason[counter.name.substr(prefix.size())] = counter.value;
+      }
+    }
+    inputs.push_back(std::move(in));
+  }
+  return inputs;
+}
+
+}  // namespace
+
+std::vector<ProcessReport> Board::judge(int64_t now_utime) const {
+  std::vector<ProcessReport> reports;
+  std::set<std::string> heard;
+  for (const auto& [key, e] : entries_) {
+    ProcessReport r;
+    r.process = e.status.process;
+    r.hostname = e.status.hostname;
+    r.pid = e.status.pid;
+    r.state = e.status.state;
+    r.message = e.status.message;
+    r.age_s = std::max<int64_t>(0, now_utime - e.receive_utime) * 1e-6;
+    r.pid_changes = e.pid_changes;
+    r.inputs = inputsOf(e.status);
+    r.verdict = r.age_s >= options_.stale_s ? Verdict::kStale : fromState(e.status.state);
+    heard.insert(r.process);
+    reports.push_back(std::move(r));
+  }
+  for (const auto& name : options_.expected) {
+    if (heard.count(name)) continue;
+    ProcessReport r;
+    r.process = name;
+    reports.push_back(std::move(r));
+  }
+  std::stable_sort(
+      reports.begin(), reports.end(),
+      [](const ProcessReport& a, const ProcessReport& b) { return a.process < b.process; });
+  return reports;
+}
+
+int exitCode(const std::vector<ProcessReport>& reports) {
+  if (reports.empty()) return kExitNotOk;  // nothing heard: not a healthy system
+  for (const auto& r : reports) {
+    if (r.verdict != Verdict::kOk) return kExitNotOk;
+  }
+  return kExitOk;
+}
+
+std::string printable(const std::string& text, size_t max_chars) {
+  std::string out;
+  for (unsigned char c : text) {
+    if (out.size() >= max_chars) {
+      out += "...";
+      break;
+    }
+    if (c < 0x20 || c == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
+namespace {
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
+  return buf;
+}
+std::string padded(const std::string& s, size_t width) {
+  return s.size() >= width ? s + " " : s + std::string(width - s.size(), ' ');
+}
+}  // namespace
+
+std::string formatLine(const ProcessReport& r) {
+  std::string line = padded(printable(r.process, 40), 13);
+  if (r.verdict == Verdict::kMissing) {
+    return line + padded("-", 13) + padded("-", 8) + padded("MISSING", 8) +
+           "no status heard (is it running? same --channel-prefix and LCM URL?)";
+  }
+  line += padded(printable(r.hostname, 40), 13) + padded(std::to_string(r.pid), 8) +
+          padded(verdictName(r.verdict), 8) + padded(fixed(r.age_s, 1) + " s", 8);
+  for (const auto& in : r.inputs) {
+    line += " " + printable(in.channel, 60) + " " + fixed(in.rate_hz, 1) + " Hz, " +
+            std::to_string(in.dropped) + " dropped";
+    if (!in.dropped_by_reason.empty()) {
+      std::string reasons;
+      for (const auto& [reason, n] : in.dropped_by_reason) {
+        reasons += (reasons.empty() ? "" : ", ") + std::to_string(n) + " " + printable(reason, 40);
+      }
+      line += " (" + reasons + ")";
+    }
+    line += ";";
+  }
+  if (r.pid_changes > 0) line += " restarted " + std::to_string(r.pid_changes) + "x;";
+  if (r.verdict == Verdict::kStale) {
+    line += " no status for " + fixed(r.age_s, 1) + " s (it last said " +
+            verdictName(fromState(r.state)) +
+            (r.message.empty() ? "" : ": " + printable(r.message)) + ")";
+  } else if (!r.message.empty()) {
+    line += " " + printable(r.message);
+  }
+  line.erase(line.find_last_not_of(' ') + 1);
+  return line;
+}
+
+std::string formatTable(const std::vector<ProcessReport>& reports) {
+  std::string out = padded("process", 13) + padded("host", 13) + padded("pid", 8) +
+                    padded("state", 8) + padded("age", 8) + " inputs; message\n";
+  for (const auto& r : reports) out += formatLine(r) + "\n";
+  return out;
+}
+
+Watchdog::Watchdog(std::vector<std::string> expected, double grace_s, int64_t start_utime)
+    : expected_(std::move(expected)),
+      grace_us_(static_cast<int64_t>(grace_s * 1e6)),
+      start_utime_(start_utime) {
+  for (const auto& name : expected_) bad_since_[name] = start_utime_;  // missing from the start
+}
+
+std::string Watchdog::update(const std::vector<ProcessReport>& reports, int64_t now_utime) {
+  // A process is bad when any line of its name is (several hosts: the worst counts).
+  std::map<std::string, bool> bad;
+  for (const auto& r : reports) {
+    const bool watched = expected_.empty() || std::find(expected_.begin(), expected_.end(),
+                                                        r.process) != expected_.end();
+    if (!watched) continue;
+    const bool is_bad = r.verdict == Verdict::kMissing || r.verdict == Verdict::kStale ||
+                        r.verdict == Verdict::kError;
+    bad[r.process] = bad[r.process] || is_bad;
+  }
+  std::string first;
+  for (const auto& [name, is_bad] : bad) {
+    if (!is_bad) {
+      bad_since_.erase(name);
+      continue;
+    }
+    const int64_t since = bad_since_.emplace(name, now_utime).first->second;
+    if (first.empty() && now_utime - since >= grace_us_) first = name;
+  }
+  return first;
+}
+
+std::vector<std::string> parseProcessList(const std::string& list) {
+  std::vector<std::string> names;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');) {
+    const auto b = item.find_first_not_of(" \t");
+    const auto e = item.find_last_not_of(" \t");
+    const std::string name = b == std::string::npos ? "" : item.substr(b, e - b + 1);
+    if (name.empty()) throw std::invalid_argument("an empty process name in '" + list + "'");
+    for (unsigned char c : name) {
+      if (!(std::isalnum(c) || c == '-' || c == '_' || c == '.')) {
+        throw std::invalid_argument("process name '" + printable(name) +
+                                    "' has a character other than letters, digits, - _ .");
+      }
+    }
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  return names;
+}
+
+}  // namespace ptz::health
