@@ -1,7 +1,7 @@
 // What the fuzz targets of fuzz/ found in common/, each from its reproducer in fuzz/corpus/: files
 // that made OpenCV's parser loop forever, throw past the loaders or allocate a matrix's declared
-// size first (fixed in config.cpp and storage_guard.cpp), and messages that pass the checks of
-// message_check.cpp yet do not survive a decode and re-encode, or cost far more than their size.
+// size first (fixed in config.cpp and storage_guard.cpp), and messages that passed the checks of
+// message_check.cpp yet did not survive a decode and re-encode, or cost far more than their size.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgcodecs.hpp>

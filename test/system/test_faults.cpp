@@ -209,14 +209,20 @@ TEST_F(Faults, APoseWithTenMillionObjectsCostsControlAndDepthNothing) {
   ptzstereo::object_pose_t pose{};
   std::vector<uint8_t> b = bytesOf(pose);
   putInt32(&b, b.size() - 4, 10'000'000);
-  for (int i = 0; i < 5; ++i) lcm.publish("OBJECT_POSE", b.data(), static_cast<unsigned>(b.size()));
-  ASSERT_TRUE(ptz::test::handleUntil(
-      lcm,
-      [&] {
-        return w.counter("ptz-control", "dropped_undecodable") == 5 &&
-               w.counter("ptz-depth", "dropped_undecodable") == 5;
-      },
-      10s));
+  // One at a time, each counted by both before the next.
+  for (int i = 1; i <= 5; ++i) {
+    lcm.publish("OBJECT_POSE", b.data(), static_cast<unsigned>(b.size()));
+    ASSERT_TRUE(ptz::test::handleUntil(
+        lcm,
+        [&] {
+          return w.counter("ptz-control", "dropped_undecodable") == i &&
+                 w.counter("ptz-depth", "dropped_undecodable") == i;
+        },
+        20s))
+        << "message " << i << ": ptz-control counted "
+        << w.counter("ptz-control", "dropped_undecodable") << ", ptz-depth "
+        << w.counter("ptz-depth", "dropped_undecodable");
+  }
   EXPECT_LT(peakRssKb(control.pid()) - control_before_kb, 16 * 1024);
   EXPECT_LT(peakRssKb(depth.pid()) - depth_before_kb, 16 * 1024);
   EXPECT_TRUE(control.running());
