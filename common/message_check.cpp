@@ -225,8 +225,10 @@ void ignoreJpegMessage(j_common_ptr, int) {}
 }  // namespace
 
 bool readJpegHeader(const uint8_t* data, size_t size, JpegHeader* header, std::string* why) {
-  if (size < 4 || data[0] != 0xFF || data[1] != 0xD8) {
-    *why = "not a JPEG (no start-of-image marker)";
+  // The start-of-image marker and a marker after it: OpenCV picks its decoder from the bytes, and
+  // garbage after FF D8 that libjpeg skips could make it take another format (DICOM aborts).
+  if (size < 4 || data[0] != 0xFF || data[1] != 0xD8 || data[2] != 0xFF) {
+    *why = "not a JPEG (no start-of-image marker followed by a marker)";
     return false;
   }
   jpeg_decompress_struct info{};

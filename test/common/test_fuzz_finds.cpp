@@ -200,3 +200,33 @@ TEST(FuzzFinds, ATinyJpegThatClaimsTheLargestSizeIsRefusedBeforeDecoding) {
   EXPECT_FALSE(ptz::checkImage(m, ptz::kMaxImageSidePx, &why))
       << jpeg.size() << " bytes of JPEG that claim " << side << "x" << side << " pass the checks";
 }
+
+// Found by fuzz_jpeg (fixed: readJpegHeader requires FF D8 FF): libjpeg reads
+// a header past garbage after the start-of-image marker, so 135 bytes starting FF D8 0A pass
+// checkImage as a 32x24 JPEG; cv::imdecode then picks its decoder by the bytes' own signature —
+// not JPEG (FF D8 FF), but DICOM ("DICM" at byte 128) — and GDCM asserts: abort(), one
+// STEREO_FRAME ends ptz-detect. The frame must be refused, or decoded as it says, and the
+// process live on.
+TEST(FuzzFindsDeathTest, AJpegThatOpenCvTakesForAnotherFormatDoesNotEndTheProcess) {
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const std::vector<uint8_t> find =
+      readBytes(corpus("fuzz_jpeg", "find-imdecode-picks-dicom-and-aborts"));
+  ASSERT_GT(find.size(), 5u);
+  ptzstereo::image_t m{};
+  m.pixel_format = static_cast<int8_t>(find[0]);  // fuzz_jpeg's prefix: format, width, height
+  m.width = find[1] << 8 | find[2];
+  m.height = find[3] << 8 | find[4];
+  m.encoding = ptzstereo::image_t::ENCODING_JPEG;
+  m.zoom = 1;
+  m.data.assign(find.begin() + 5, find.end());
+  m.data_size = static_cast<int32_t>(m.data.size());
+  EXPECT_EXIT(
+      {
+        cv::Mat out;
+        std::string why;
+        const bool decoded = ptz::decodeImage(m, &out, &why);
+        const bool as_said = out.cols == m.width && out.rows == m.height && out.type() == CV_8UC3;
+        std::exit(!decoded || as_said ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
+}
