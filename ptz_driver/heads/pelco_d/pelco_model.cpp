@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/config.hpp"
+#include "ptz_driver/heads/pan_tilt_range.hpp"
 
 namespace ptz::driver {
 namespace {
@@ -49,16 +50,11 @@ PelcoModel PelcoModel::load(const std::string& path) {
   m.tilt_direction = readDirection(root, "tilt_direction", where);
   // Both ends within half a turn of zero, or the angle read back is ambiguous.
   const Range angle = Range::above(-180).andAtMost(180);
-  const double pan_min = readDouble(root, "pan_min_deg", where, angle);
-  const double pan_max = readDouble(root, "pan_max_deg", where, angle);
-  const double tilt_min = readDouble(root, "tilt_min_deg", where, angle);
-  const double tilt_max = readDouble(root, "tilt_max_deg", where, angle);
-  checkFieldOrder(pan_min, pan_max, where, "pan_min_deg", "pan_max_deg");
-  checkFieldOrder(tilt_min, tilt_max, where, "tilt_min_deg", "tilt_max_deg");
-  m.pan_min_rad = pan_min * kDeg;
-  m.pan_max_rad = pan_max * kDeg;
-  m.tilt_min_rad = tilt_min * kDeg;
-  m.tilt_max_rad = tilt_max * kDeg;
+  const PanTiltRange range = readPanTiltRange(root, where, angle);
+  m.pan_min_rad = range.pan_min_rad;
+  m.pan_max_rad = range.pan_max_rad;
+  m.tilt_min_rad = range.tilt_min_rad;
+  m.tilt_max_rad = range.tilt_max_rad;
   m.zoom = ZoomTable::read(root, where);
   return m;
 }

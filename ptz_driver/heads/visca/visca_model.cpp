@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/config.hpp"
+#include "ptz_driver/heads/pan_tilt_range.hpp"
 
 namespace ptz::driver {
 
@@ -23,16 +24,11 @@ ViscaModel ViscaModel::load(const std::string& path) {
   const Range angle = Range::between(-360, 360);
   m.pan_units_per_rad = readDouble(root, "pan_units_per_deg", where, Range::above(0)) / deg;
   m.tilt_units_per_rad = readDouble(root, "tilt_units_per_deg", where, Range::above(0)) / deg;
-  const double pan_min = readDouble(root, "pan_min_deg", where, angle);
-  const double pan_max = readDouble(root, "pan_max_deg", where, angle);
-  const double tilt_min = readDouble(root, "tilt_min_deg", where, angle);
-  const double tilt_max = readDouble(root, "tilt_max_deg", where, angle);
-  checkFieldOrder(pan_min, pan_max, where, "pan_min_deg", "pan_max_deg");
-  checkFieldOrder(tilt_min, tilt_max, where, "tilt_min_deg", "tilt_max_deg");
-  m.pan_min_rad = pan_min * deg;
-  m.pan_max_rad = pan_max * deg;
-  m.tilt_min_rad = tilt_min * deg;
-  m.tilt_max_rad = tilt_max * deg;
+  const PanTiltRange range = readPanTiltRange(root, where, angle);
+  m.pan_min_rad = range.pan_min_rad;
+  m.pan_max_rad = range.pan_max_rad;
+  m.tilt_min_rad = range.tilt_min_rad;
+  m.tilt_max_rad = range.tilt_max_rad;
   // VISCA speeds are one byte, 1 up to the model's maximum.
   m.pan_speed_max = readInt(root, "pan_speed_max", where, Range::between(1, 127));
   m.tilt_speed_max = readInt(root, "tilt_speed_max", where, Range::between(1, 127));
