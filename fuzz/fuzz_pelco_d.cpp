@@ -29,35 +29,34 @@ ptz::driver::PelcoModel model() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  if (size < 1) return 0;
-  const size_t piece = 1 + data[0] % 32;
-  ++data;
-  --size;
+  const ptz::fuzz::Pieces in = ptz::fuzz::piecesOf(data, size);
+  if (in.size == 0) return 0;
 
   pelco_d::ReplyParser parser;
   int64_t replies = 0;
-  for (size_t at = 0; at < size; at += piece) {
-    parser.feed(data + at, std::min(piece, size - at));
+  in.forEach([&](const uint8_t* bytes, size_t n) {
+    parser.feed(bytes, n);
     while (auto r = parser.next()) {
       FUZZ_CHECK(
           r->address >= 0 && r->address <= 255 && r->value >= 0 && r->value <= 0xFFFF,
           "reply address " + std::to_string(r->address) + " value " + std::to_string(r->value));
       ++replies;
     }
-  }
+  });
+  const int64_t bytes_in = static_cast<int64_t>(in.size);
   const int64_t accounted = parser.skippedBytes() + 7 * replies;
-  FUZZ_CHECK(accounted <= static_cast<int64_t>(size) && accounted + 6 >= static_cast<int64_t>(size),
-             std::to_string(size) + " bytes but " + std::to_string(parser.skippedBytes()) +
+  FUZZ_CHECK(accounted <= bytes_in && accounted + 6 >= bytes_in,
+             std::to_string(bytes_in) + " bytes but " + std::to_string(parser.skippedBytes()) +
                  " skipped and " + std::to_string(replies) + " frames");
 
   ptz::driver::PelcoDBusEmulator heads(model(), ptz::defaultPlantParams(), {1, 2}, true);
   pelco_d::ReplyParser answers;
   double now_s = 0;
-  for (size_t at = 0; at < size; at += piece) {
-    const ptz::driver::Bytes out = heads.feed(data + at, std::min(piece, size - at), now_s);
+  in.forEach([&](const uint8_t* bytes, size_t n) {
+    const ptz::driver::Bytes out = heads.feed(bytes, n, now_s);
     answers.feed(out.data(), out.size());
     now_s += 0.01;
-  }
+  });
   FUZZ_CHECK(answers.badChecksums() == 0 && answers.skippedBytes() == 0,
              "the emulated heads answered bytes that are not clean frames");
   return 0;

@@ -5,27 +5,15 @@
 #include <cmath>
 
 #include "common/config.hpp"
-#include "fuzz/fuzz_support.hpp"
+#include "fuzz/fuzz_model_support.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const ptz::fuzz::InputFile file(data, size, "pelco.yaml");
-  ptz::driver::PelcoModel m;
-  try {
-    m = ptz::driver::PelcoModel::load(file.path());
-  } catch (const ptz::ConfigError& e) {
-    FUZZ_CHECK(ptz::fuzz::names(e.what(), file.path()),
-               std::string("error without the file: ") + e.what());
-    return 0;
-  }
+  const auto loaded = ptz::fuzz::loadModel<ptz::driver::PelcoModel>(data, size, "pelco.yaml");
+  if (!loaded) return 0;
+  const ptz::driver::PelcoModel& m = *loaded;
   const auto& z = m.zoom;
-  FUZZ_CHECK(z.positions.size() >= 2 && z.positions.size() == z.ratios.size(), "zoom table size");
-  for (size_t i = 0; i < z.positions.size(); ++i) {
-    FUZZ_CHECK(std::isfinite(z.positions[i]) && std::isfinite(z.ratios[i]) && z.ratios[i] > 0,
-               "zoom table entry " + std::to_string(i) + " not finite or ratio <= 0");
-    FUZZ_CHECK(i == 0 || (z.positions[i] > z.positions[i - 1] && z.ratios[i] > z.ratios[i - 1]),
-               "zoom table not increasing at " + std::to_string(i));
-  }
+  ptz::fuzz::checkZoomTable(z);
   FUZZ_CHECK(z.positions.front() >= 0 && z.positions.back() <= 0xFFFF,
              "zoom positions beyond 16 bits");
   const double centideg_rad = M_PI / 18000;

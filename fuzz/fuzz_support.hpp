@@ -3,6 +3,8 @@
 // allocated while a call runs (through the sanitizer's malloc hooks).
 #pragma once
 
+#include <algorithm>
+
 #include <sanitizer/allocator_interface.h>
 #include <unistd.h>
 
@@ -78,6 +80,22 @@ class InputFile {
  private:
   std::string path_;
 };
+
+// The input as a serial line delivers it: its first byte picks the size of the pieces (1..32),
+// the rest is fed a piece at a time, as reads return them. Empty when the input is.
+struct Pieces {
+  const uint8_t* data = nullptr;
+  size_t size = 0;
+  size_t piece = 1;
+  template <class Feed>
+  void forEach(Feed feed) const {
+    for (size_t at = 0; at < size; at += piece) feed(data + at, std::min(piece, size - at));
+  }
+};
+inline Pieces piecesOf(const uint8_t* data, size_t size) {
+  if (size < 1) return {};
+  return {data + 1, size - 1, 1 + static_cast<size_t>(data[0] % 32)};
+}
 
 // Whether `text` names `path` (errors about a file must say which).
 inline bool names(const std::string& text, const std::string& path) {

@@ -52,28 +52,27 @@ void checkReply(const visca::Reply& r) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  if (size < 1) return 0;
-  const size_t piece = 1 + data[0] % 32;
-  ++data;
-  --size;
+  const ptz::fuzz::Pieces in = ptz::fuzz::piecesOf(data, size);
+  if (in.size == 0) return 0;
 
   visca::ReplyParser parser;
   size_t replies = 0;
-  for (size_t at = 0; at < size; at += piece) {
-    parser.feed(data + at, std::min(piece, size - at));
+  in.forEach([&](const uint8_t* bytes, size_t n) {
+    parser.feed(bytes, n);
     while (auto r = parser.next()) {
       checkReply(*r);
       ++replies;
     }
-  }
-  FUZZ_CHECK(replies <= size / 3,
-             std::to_string(replies) + " replies from " + std::to_string(size) + " bytes");
+  });
+  FUZZ_CHECK(replies <= in.size / 3,
+             std::to_string(replies) + " replies from " + std::to_string(in.size) + " bytes");
 
   visca_ip::Message m;
   std::string why;
-  if (visca_ip::unwrap(data, size, &m, &why)) {
+  if (visca_ip::unwrap(in.data, in.size, &m, &why)) {
     const ptz::driver::Bytes again = visca_ip::wrap(m.type, m.sequence, m.payload);
-    FUZZ_CHECK(again == ptz::driver::Bytes(data, data + size), "unwrap + wrap changed the bytes");
+    FUZZ_CHECK(again == ptz::driver::Bytes(in.data, in.data + in.size),
+               "unwrap + wrap changed the bytes");
   } else {
     FUZZ_CHECK(!why.empty(), "a refused datagram without a reason");
   }

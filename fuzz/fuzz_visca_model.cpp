@@ -6,33 +6,13 @@
 #include <cmath>
 
 #include "common/config.hpp"
-#include "fuzz/fuzz_support.hpp"
+#include "fuzz/fuzz_model_support.hpp"
 #include "ptz_driver/heads/visca/visca_model.hpp"
 
-namespace {
-
-void checkTable(const ptz::driver::ZoomTable& z) {
-  FUZZ_CHECK(z.positions.size() >= 2 && z.positions.size() == z.ratios.size(), "zoom table size");
-  for (size_t i = 0; i < z.positions.size(); ++i) {
-    FUZZ_CHECK(std::isfinite(z.positions[i]) && std::isfinite(z.ratios[i]) && z.ratios[i] > 0,
-               "zoom table entry " + std::to_string(i) + " not finite or ratio <= 0");
-    FUZZ_CHECK(i == 0 || (z.positions[i] > z.positions[i - 1] && z.ratios[i] > z.ratios[i - 1]),
-               "zoom table not increasing at " + std::to_string(i));
-  }
-}
-
-}  // namespace
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const ptz::fuzz::InputFile file(data, size, "visca.yaml");
-  ptz::driver::ViscaModel m;
-  try {
-    m = ptz::driver::ViscaModel::load(file.path());
-  } catch (const ptz::ConfigError& e) {
-    FUZZ_CHECK(ptz::fuzz::names(e.what(), file.path()),
-               std::string("error without the file: ") + e.what());
-    return 0;
-  }
+  const auto loaded = ptz::fuzz::loadModel<ptz::driver::ViscaModel>(data, size, "visca.yaml");
+  if (!loaded) return 0;
+  const ptz::driver::ViscaModel& m = *loaded;
   FUZZ_CHECK(m.pan_nibbles == 4 || m.pan_nibbles == 5,
              "pan_nibbles " + std::to_string(m.pan_nibbles));
   FUZZ_CHECK(std::isfinite(m.pan_units_per_rad) && m.pan_units_per_rad > 0 &&
@@ -46,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                  m.tilt_speed_max <= 0x7F,
              "speeds " + std::to_string(m.pan_speed_max) + ", " + std::to_string(m.tilt_speed_max) +
                  " do not fit a VISCA data byte");
-  checkTable(m.zoom);
+  ptz::fuzz::checkZoomTable(m.zoom);
   FUZZ_CHECK(m.zoom.positions.front() >= 0 && m.zoom.positions.back() <= 0xFFFF,
              "zoom positions beyond 4 nibbles");
   const int32_t pan_limit = 1 << (4 * m.pan_nibbles - 1);
