@@ -8,13 +8,16 @@
 #include <cstring>
 #include <exception>
 
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace ptz {
 namespace {
@@ -91,6 +94,10 @@ size_t fixedSize() {
 
 // Smallest encodings of the elements of variable arrays (a string takes at least 5 bytes).
 constexpr size_t kMinString = 5;
+// An object_track_t after its id and class_name: state; position, velocity and their
+// covariances, acceleration, radius, age_s, since_update_s (30 doubles); object_index,
+// untrusted_updates; has_orientation; orientation and its covariance (13 doubles).
+constexpr size_t kTrackAfterName = 1 + 30 * 8 + 2 * 4 + 1 + 13 * 8;
 
 bool walkImage(Cursor& c, const char* side) {
   int32_t n = 0;
@@ -111,6 +118,10 @@ bool walkDetections(Cursor& c, const char* field) {
 bool walk(Cursor& c, const ptzstereo::stereo_frame_t*) {
   return c.skip(3 * 8, "header") && walkImage(c, "left") && walkImage(c, "right");
 }
+bool walk(Cursor& c, const ptzstereo::control_state_t*) {
+  // utime, publish_utime, frame_seq, state, target_id, since_target_s, the two waypoint counts.
+  return c.skip(3 * 8 + 1 + 2 * 8 + 2 * 4, "header") && c.str("reason");
+}
 bool walk(Cursor& c, const ptzstereo::object_detections_t*) {
   return c.skip(3 * 8, "header") && walkDetections(c, "num_left") && walkDetections(c, "num_right");
 }
@@ -120,6 +131,20 @@ bool walk(Cursor& c, const ptzstereo::object_pose_t*) {
   if (!c.count(&n, kMinString + 13 * 8 + 2 * 4, "num_objects")) return false;
   for (int32_t i = 0; i < n; ++i) {
     if (!c.str("class_name") || !c.skip(13 * 8 + 2 * 4, "objects")) return false;
+  }
+  return true;
+}
+bool walk(Cursor& c, const ptzstereo::object_tracks_t*) {
+  int32_t n = 0;
+  if (!c.skip(3 * 8 + 2 * fixedSize<ptzstereo::ptz_head_setpoint_t>() + 8, "header") ||
+      !c.str("target_reason") || !c.count(&n, 8 + kMinString + kTrackAfterName, "num_tracks")) {
+    return false;
+  }
+  for (int32_t i = 0; i < n; ++i) {
+    if (!c.skip(8, "tracks.id") || !c.str("tracks.class_name") ||
+        !c.skip(kTrackAfterName, "tracks")) {
+      return false;
+    }
   }
   return true;
 }
@@ -168,6 +193,10 @@ bool walk(Cursor& c, const ptzstereo::sim_truth_t*) {
   }
   return true;
 }
+bool walk(Cursor& c, const ptzstereo::target_select_t*) {
+  // utime, publish_utime, mode; class_name; track_id, camera, x_px, y_px, frame_seq.
+  return c.skip(2 * 8 + 1, "header") && c.str("class_name") && c.skip(8 + 1 + 3 * 8, "track_id");
+}
 
 }  // namespace
 
@@ -201,13 +230,16 @@ bool decodeChecked(const void* data, size_t size, Msg* msg, std::string* why) {
   template bool checkEncoding<ptzstereo::T>(const void*, size_t, std::string*); \
   template bool decodeChecked<ptzstereo::T>(const void*, size_t, ptzstereo::T*, std::string*);
 PTZ_CHECKED_MESSAGE(stereo_frame_t)
+PTZ_CHECKED_MESSAGE(control_state_t)
 PTZ_CHECKED_MESSAGE(object_detections_t)
 PTZ_CHECKED_MESSAGE(object_pose_t)
+PTZ_CHECKED_MESSAGE(object_tracks_t)
 PTZ_CHECKED_MESSAGE(point_cloud_t)
 PTZ_CHECKED_MESSAGE(process_status_t)
 PTZ_CHECKED_MESSAGE(ptz_setpoint_t)
 PTZ_CHECKED_MESSAGE(ptz_state_t)
 PTZ_CHECKED_MESSAGE(sim_truth_t)
+PTZ_CHECKED_MESSAGE(target_select_t)
 #undef PTZ_CHECKED_MESSAGE
 
 namespace {

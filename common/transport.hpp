@@ -21,6 +21,7 @@
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace ptz {
 
@@ -45,6 +46,9 @@ constexpr const char* kPtzSetpoint = "PTZ_SETPOINT";
 constexpr const char* kSimTruth = "SIM_TRUTH";
 constexpr const char* kObjectDetections = "OBJECT_DETECTIONS";
 constexpr const char* kObjectPose = "OBJECT_POSE";
+constexpr const char* kObjectTracks = "OBJECT_TRACKS";
+constexpr const char* kTargetSelect = "TARGET_SELECT";
+constexpr const char* kControlState = "CONTROL_STATE";
 constexpr const char* kPointCloud = "POINT_CLOUD";
 constexpr const char* kDisparityImage = "DISPARITY_IMAGE";
 constexpr const char* kProcessStatusPrefix = "PROCESS_STATUS_";
@@ -199,6 +203,10 @@ int64_t frameSeq(const Msg&, long) {
 }  // namespace detail
 inline int64_t sequenceOf(const ptzstereo::stereo_frame_t& m) {
   return m.seq;
+}
+// A request's frame_seq names the frame pointed at, not a place in a sequence of requests.
+inline int64_t sequenceOf(const ptzstereo::target_select_t&) {
+  return -1;
 }
 template <class Msg>
 int64_t sequenceOf(const Msg& m) {

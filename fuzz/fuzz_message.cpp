@@ -15,14 +15,17 @@
 #include "common/message_check.hpp"
 #include "common/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 using Msg = ptzstereo::PTZ_FUZZ_MESSAGE;
 

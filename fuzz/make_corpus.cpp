@@ -22,14 +22,17 @@
 #include "ptz_driver/emulators/visca_camera_emulator.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 #include "ptz_driver/heads/visca/visca.hpp"
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace {
 
@@ -172,6 +175,84 @@ void messages() {
   for (int i = 0; i < 4; ++i)
     many[count_at + static_cast<size_t>(i)] = static_cast<uint8_t>(n >> (24 - 8 * i));
   write("fuzz_object_pose", "num_objects_10m", many);
+
+  object_tracks_t tracks{};
+  tracks.utime = t;
+  tracks.publish_utime = t + 21'500;
+  tracks.frame_seq = 7;
+  tracks.left_ptz = p.left_ptz;
+  tracks.right_ptz = p.right_ptz;
+  tracks.target_id = 3;
+  tracks.target_reason = "locked on track 3 (red_ball) by class";
+  object_track_t track{};
+  track.id = 3;
+  track.class_name = "red_ball";
+  track.state = object_track_t::STATE_CONFIRMED;
+  for (int i = 0; i < 3; ++i) {
+    track.position_m[i] = o.position_m[i];
+    track.position_covariance_m2[4 * i] = 1e-4;
+    track.velocity_covariance_m2_s2[4 * i] = 1e-2;
+  }
+  track.velocity_m_s[0] = 0.4;
+  track.radius_m = 0.1;
+  track.age_s = 5.2;
+  track.since_update_s = 0;
+  track.object_index = 0;
+  tracks.tracks = {track, track};
+  object_track_t& box = tracks.tracks[1];
+  box.id = 5;
+  box.class_name = "green_box";
+  box.state = object_track_t::STATE_COASTING;
+  box.since_update_s = 0.1;
+  box.object_index = -1;
+  box.untrusted_updates = 2;
+  box.has_orientation = true;
+  box.orientation_wxyz[0] = 1;
+  for (int i = 0; i < 9; i += 4) box.orientation_covariance_rad2[i] = 0.01;
+  tracks.num_tracks = 2;
+  write("fuzz_object_tracks", "two_tracks", encode(tracks));
+  // 10 000 000 tracks in a small message, as the poses above.
+  Bytes many_tracks = encode(tracks);
+  const size_t tracks_count_at = 8 + 3 * 8 + 2 * 3 * 8 + 8 + 4 + tracks.target_reason.size() + 1;
+  for (int i = 0; i < 4; ++i)
+    many_tracks[tracks_count_at + static_cast<size_t>(i)] = static_cast<uint8_t>(n >> (24 - 8 * i));
+  write("fuzz_object_tracks", "num_tracks_10m", many_tracks);
+
+  target_select_t select{};
+  select.utime = select.publish_utime = t;
+  select.mode = target_select_t::MODE_CLASS;
+  select.class_name = "green_box";
+  select.track_id = -1;
+  select.frame_seq = -1;
+  write("fuzz_target_select", "by_class", encode(select));
+  select.mode = target_select_t::MODE_TRACK_ID;
+  select.class_name = "";
+  select.track_id = 5;
+  write("fuzz_target_select", "by_track_id", encode(select));
+  select.mode = target_select_t::MODE_IMAGE_POINT;
+  select.track_id = -1;
+  select.camera = target_select_t::CAMERA_RIGHT;
+  select.x_px = 412.5;
+  select.y_px = 230.25;
+  select.frame_seq = 7;
+  write("fuzz_target_select", "by_image_point", encode(select));
+
+  control_state_t cs{};
+  cs.utime = t;
+  cs.publish_utime = t + 22'000;
+  cs.frame_seq = 7;
+  cs.state = control_state_t::STATE_TRACKING;
+  cs.target_id = 3;
+  cs.search_waypoint = -1;
+  cs.reason = "tracking";
+  write("fuzz_control_state", "tracking", encode(cs));
+  cs.state = control_state_t::STATE_SEARCHING;
+  cs.target_id = -1;
+  cs.since_target_s = 1.5;
+  cs.search_waypoint = 2;
+  cs.search_waypoints = 8;
+  cs.reason = "no target: searching, waypoint 3 of 8";
+  write("fuzz_control_state", "searching", encode(cs));
 
   point_cloud_t c{};
   c.utime = t;

@@ -13,8 +13,9 @@ Trajectory::Type Trajectory::parseType(const std::string& name, const std::strin
   if (name == "circle") return Type::kCircle;
   if (name == "figure_eight") return Type::kFigureEight;
   if (name == "random_walk") return Type::kRandomWalk;
+  if (name == "arc") return Type::kArc;
   throw ConfigError(fieldPath(where, "trajectory") +
-                    ": must be one of static, line, circle, figure_eight, random_walk, got '" +
+                    ": must be one of static, line, circle, figure_eight, random_walk, arc, got '" +
                     name + "'");
 }
 
@@ -36,6 +37,11 @@ Eigen::Vector3d Trajectory::position(double t) const {
     case Type::kFigureEight:
       return centre_m +
              Eigen::Vector3d(A.x() * std::sin(a), A.y() * std::sin(2 * a), A.z() * std::sin(2 * a));
+    case Type::kArc: {
+      const double azimuth = arc_rad * std::sin(a);
+      return centre_m + Eigen::Vector3d(A.x() * std::sin(azimuth), A.y() * std::sin(2 * a),
+                                        A.x() * std::cos(azimuth));
+    }
     case Type::kRandomWalk: {
       // A band-limited random path: a seeded sum of sinusoids, smooth and within +-A.
       std::mt19937 rng(seed);
@@ -92,7 +98,7 @@ unsigned readSeed(const cv::FileNode& n, const std::string& field, const std::st
 // The fields an object may have (besides those of its shape).
 const std::vector<std::string> kObjectFields = {"name",     "class",      "shape",    "color_bgr",
                                                 "textured", "trajectory", "centre_m", "amplitude_m",
-                                                "period_s", "phase_rad",  "seed"};
+                                                "period_s", "phase_rad",  "seed",     "arc_rad"};
 
 SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   SceneObject o;
@@ -131,6 +137,7 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   t.period_s = readDouble(n, "period_s", w, t.period_s, Range::above(0));
   t.phase_rad = readDouble(n, "phase_rad", w, 0.0);
   t.seed = readSeed(n, "seed", w, t.seed);
+  t.arc_rad = readDouble(n, "arc_rad", w, t.arc_rad, Range::between(0, 2 * M_PI));
   return o;
 }
 

@@ -13,7 +13,7 @@
 namespace ptz::sim {
 
 struct Trajectory {
-  enum class Type { kStatic, kLine, kCircle, kFigureEight, kRandomWalk };
+  enum class Type { kStatic, kLine, kCircle, kFigureEight, kRandomWalk, kArc };
   Type type = Type::kStatic;
   Eigen::Vector3d centre_m = Eigen::Vector3d(0, 0, 3);
   // Half-extent of the motion along x, y, z, m.
@@ -21,6 +21,9 @@ struct Trajectory {
   double period_s = 20.0;
   double phase_rad = 0.0;
   unsigned seed = 1;  // random_walk only
+  // arc: around centre_m at the radius amplitude_m.x, the azimuth (from +z towards +x) swinging
+  // between -arc_rad and +arc_rad; amplitude_m.y bobs it up and down.
+  double arc_rad = M_PI / 2;
 
   Eigen::Vector3d position(double t_s) const;
   Eigen::Vector3d velocity(double t_s) const;

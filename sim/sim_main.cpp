@@ -52,8 +52,12 @@ void declare(Params& p) {
   p.addSection("objects",
                "list of {name, class, shape: sphere|box, radius_m | half_extents_m, color_bgr, "
                "textured (0; 1: the colour modulated by the surface texture, for dense stereo), "
-               "trajectory, centre_m, amplitude_m, period_s, phase_rad, seed}");
+               "trajectory: static|line|circle|figure_eight|random_walk|arc, centre_m, "
+               "amplitude_m, period_s, phase_rad, seed, arc_rad}");
   p.addSection("chessboard", "{inner_cols, inner_rows, square_m, centre_m, rotation_vector}");
+  p.addSection("scenario",
+               "read by the scenario runner (test/scenarios/README.md), not by ptz-sim: "
+               "{description, detect_args, control_args, checks}");
 }
 
 class SimNode {

@@ -29,13 +29,49 @@ std::array<SmithPredictor, 4> makeSmith(const ControllerParams& p) {
 
 }  // namespace
 
-Controller::Controller(StereoRig rig, ControllerParams params)
-    : rig_(std::move(rig)), p_(std::move(params)), kalman_(p_.kalman), smith_(makeSmith(p_)) {}
+const char* controlStateName(ControlState s) {
+  switch (s) {
+    case ControlState::kTracking:
+      return "tracking";
+    case ControlState::kCoasting:
+      return "coasting";
+    case ControlState::kSearching:
+      return "searching";
+    case ControlState::kHolding:
+      return "holding";
+    case ControlState::kHoming:
+      return "homing";
+  }
+  return "?";
+}
 
-bool Controller::plausible(const Observation& o) const {
+Controller::Controller(StereoRig rig, ControllerParams params)
+    : rig_(std::move(rig)),
+      p_(std::move(params)),
+      search_(rig_, p_.search),
+      kalman_(p_.kalman),
+      smith_(makeSmith(p_)) {}
+
+void Controller::setState(ControlState s, std::string reason) {
+  state_ = s;
+  reason_ = std::move(reason);
+}
+
+bool Controller::plausible(const Observation& o, const PtzPose& left_at_capture,
+                           const PtzPose& right_at_capture) const {
   if (!o.position_head_m.allFinite() || !std::isfinite(o.radius_m)) return false;
-  const double range = o.position_head_m.norm();
-  return range >= p_.min_range_m && range <= p_.max_range_m && o.position_head_m.z() > 0;
+  // In front of both cameras as they pointed at capture, and within range of each: anywhere the
+  // heads can point, not only in front of the head frame.
+  for (const Side side : {Side::kLeft, Side::kRight}) {
+    const PtzPose& at = side == Side::kLeft ? left_at_capture : right_at_capture;
+    Eigen::Matrix3d R;
+    Eigen::Vector3d c;
+    rig_.cameraPose(side, at.pan_rad, at.tilt_rad, &R, &c);
+    const Eigen::Vector3d p_camera = R.transpose() * (o.position_head_m - c);
+    const double range = p_camera.norm();
+    if (!(p_camera.z() > 0) || range < p_.min_range_m || range > p_.max_range_m) return false;
+  }
+  return true;
 }
 
 double Controller::zoomFor(Side side, const Observation& o, const PtzPose& at_capture) const {
@@ -62,6 +98,24 @@ PtzPose Controller::desired(Side side, const Observation& o, const PtzPose& at_c
   if (p_.mode == "paper") {
     goal.pan_rad = p_.paper_gain * (pan - at_capture.pan_rad);
     goal.tilt_rad = p_.paper_gain * (tilt - at_capture.tilt_rad);
+    return goal;
+  }
+  if (o.velocity_m_s) {
+    // Track, from a track: the rate of theta* from the track's velocity (no filter lag), so
+    // u = theta* + lead_s * d(theta*)/dt inverts the axis's PT1 on curves as on straight lines.
+    constexpr double kStepS = 0.02;
+    const Eigen::Vector3d& v = *o.velocity_m_s;
+    double pan_a = pan, tilt_a = tilt, pan_b = pan, tilt_b = tilt;
+    const bool rate_ok = aimAt(rig_, side, o.position_head_m + v * kStepS, goal.zoom,
+                               imageCentre(spec), &pan_a, &tilt_a) &&
+                         aimAt(rig_, side, o.position_head_m - v * kStepS, goal.zoom,
+                               imageCentre(spec), &pan_b, &tilt_b);
+    rate_[i] =
+        rate_ok ? Eigen::Vector2d((pan_a - pan_b) / (2 * kStepS), (tilt_a - tilt_b) / (2 * kStepS))
+                : Eigen::Vector2d(0, 0);
+    last_desired_[i] = {pan, tilt, goal.zoom};
+    goal.pan_rad = pan + rate_[i].x() * p_.lead_s;
+    goal.tilt_rad = tilt + rate_[i].y() * p_.lead_s;
     return goal;
   }
   // Track: the filtered rate of theta* times the lead.
@@ -136,6 +190,65 @@ void Controller::slewTowards(const std::array<PtzPose, 2>& goal, double dt, doub
   }
 }
 
+bool Controller::beyondLimits(const std::array<PtzPose, 2>& goal) const {
+  const double m = p_.limit_margin_rad;
+  for (const PtzPose& g : goal) {
+    if (g.pan_rad < p_.limits.axis[0].min_position + m ||
+        g.pan_rad > p_.limits.axis[0].max_position - m ||
+        g.tilt_rad < p_.limits.axis[1].min_position + m ||
+        g.tilt_rad > p_.limits.axis[1].max_position - m) {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::array<PtzPose, 2> Controller::follow(double t_s, const Observation& o,
+                                          const PtzPose& left_at_capture,
+                                          const PtzPose& right_at_capture, double dt) {
+  if (p_.mode == "smith") {
+    if (o.measured) observe(t_s, o);
+    return {desiredSmith(Side::kLeft, o, left_at_capture, t_s, dt),
+            desiredSmith(Side::kRight, o, right_at_capture, t_s, dt)};
+  }
+  return {desired(Side::kLeft, o, left_at_capture, dt),
+          desired(Side::kRight, o, right_at_capture, dt)};
+}
+
+void Controller::lost(double t_s, double dt) {
+  tracking_ = false;
+  rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  const double since = t_s - (last_seen_t_s_ ? *last_seen_t_s_ : *first_t_s_);
+  if (since < p_.lost_hold_s) {
+    setState(ControlState::kHolding, last_seen_t_s_ ? "target lost: holding" : "no target yet");
+    return;
+  }
+  if (p_.lost_mode == "home") {
+    kalman_.reset();
+    setState(ControlState::kHoming, "no target: returning home");
+    slewTowards({PtzPose{0, 0, 1}, PtzPose{0, 0, 1}}, dt, p_.home_rate, p_.home_rate);
+    return;
+  }
+  if (lost_at_limit_ && since < p_.limit_wait_s) {
+    setState(ControlState::kHolding, "target lost beyond an axis limit: waiting there");
+    return;
+  }
+  kalman_.reset();
+  const Eigen::Vector2d from(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
+  if (!search_.active()) search_.start(from, last_seen_direction_);
+  const Eigen::Vector2d dir = search_.direction(t_s, from);
+  std::array<PtzPose, 2> goal = setpoint_;
+  for (int i = 0; i < 2; ++i) {
+    const Side side = i == 0 ? Side::kLeft : Side::kRight;
+    search_.aim(side, dir, &goal[i].pan_rad, &goal[i].tilt_rad);
+    goal[i].zoom = rig_.camera(side).minZoom();
+  }
+  setState(ControlState::kSearching, "no target: searching, waypoint " +
+                                         std::to_string(search_.waypoint() + 1) + " of " +
+                                         std::to_string(search_.waypoints()));
+  slewTowards(goal, dt, std::min(p_.search.rate_rad_s, p_.max_setpoint_rate), p_.max_setpoint_rate);
+}
+
 std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observation>& target,
                                           const PtzPose& left_at_capture,
                                           const PtzPose& right_at_capture) {
@@ -143,42 +256,49 @@ std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observ
     // Time went back (a restarted simulator, realtime to lockstep): start afresh.
     last_t_s_.reset();
     last_seen_t_s_.reset();
+    first_t_s_.reset();
+    last_seen_direction_.reset();
+    lost_at_limit_ = false;
     tracking_ = false;
     rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
     kalman_.reset();
     smith_ = makeSmith(p_);
+    search_.stop();
   }
   if (!last_t_s_) {
     setpoint_ = {left_at_capture, right_at_capture};  // start where the heads are
+    first_t_s_ = t_s;
   }
   const double dt = last_t_s_ ? std::clamp(t_s - *last_t_s_, 0.0, 1.0) : 0.0;
   last_t_s_ = t_s;
-  const bool smith = p_.mode == "smith";
-  if (target && plausible(*target)) {
-    std::array<PtzPose, 2> goal;
-    if (smith) {
-      observe(t_s, *target);
-      goal = {desiredSmith(Side::kLeft, *target, left_at_capture, t_s, dt),
-              desiredSmith(Side::kRight, *target, right_at_capture, t_s, dt)};
+  const bool usable = target && plausible(*target, left_at_capture, right_at_capture);
+  const bool coasting = usable && !target->measured;
+  const double since_seen = last_seen_t_s_ ? t_s - *last_seen_t_s_ : INFINITY;
+  if (usable && (!coasting || since_seen <= p_.coast_s)) {
+    const std::array<PtzPose, 2> goal = follow(t_s, *target, left_at_capture, right_at_capture, dt);
+    const bool at_limit = beyondLimits(goal);
+    if (coasting) {
+      setState(at_limit ? ControlState::kHolding : ControlState::kCoasting,
+               at_limit ? "target hidden beyond an axis limit: waiting there"
+                        : "target hidden: following its prediction");
     } else {
-      goal = {desired(Side::kLeft, *target, left_at_capture, dt),
-              desired(Side::kRight, *target, right_at_capture, dt)};
+      setState(ControlState::kTracking, "tracking");
+      tracking_ = true;
+      last_seen_t_s_ = t_s;
     }
-    tracking_ = true;
-    last_seen_t_s_ = t_s;
+    lost_at_limit_ = at_limit;
+    search_.stop();
     // The first setpoint after start or a loss slews too; dt = 0 means "this frame": allow one
     // frame's worth at 30 Hz.
     const double step_dt = dt > 0 ? dt : 1.0 / 30;
     slewTowards(goal, step_dt, p_.max_setpoint_rate, p_.max_setpoint_rate);
+    if (!coasting)
+      last_seen_direction_ = Eigen::Vector2d(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
   } else {
-    tracking_ = false;
-    rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-    if (!last_seen_t_s_ || t_s - *last_seen_t_s_ >= p_.lost_hold_s) {
-      kalman_.reset();
-      slewTowards({PtzPose{0, 0, 1}, PtzPose{0, 0, 1}}, dt, p_.home_rate, p_.home_rate);
-    }  // else hold
+    lost(t_s, dt);
   }
-  if (smith) smithSent(t_s, left_at_capture, right_at_capture);
+  since_target_s_ = t_s - (last_seen_t_s_ ? *last_seen_t_s_ : *first_t_s_);
+  if (p_.mode == "smith") smithSent(t_s, left_at_capture, right_at_capture);
   return setpoint_;
 }
 

@@ -20,9 +20,12 @@
 //   time), and a Smith predictor per pan/tilt axis (smith.hpp) steers the plant model's
 //   delay-free output onto that prediction, corrected by the measured angle at capture.
 //
-// Both: setpoints slew at most max_setpoint_rate and stay within the limits; without a target
-// for lost_hold_s the last setpoint holds, then the heads return home at home_rate; a target
-// found again is resumed from the current setpoint (slewed, no jump).
+// Every mode: setpoints slew at most max_setpoint_rate and stay within the limits. Through a loss
+// of the target track (it coasts on its prediction) the heads follow the prediction for coast_s
+// (coasting); a target whose aim is beyond an axis limit is waited for at the limit (holding,
+// limit_wait_s). Then, or without any target lost_hold_s after the start, the heads search
+// (search.hpp), or with lost_mode "home" hold and return home at home_rate. A target found again
+// is resumed from the current setpoint (slewed, no jump).
 #pragma once
 
 #include <Eigen/Core>
@@ -35,6 +38,7 @@
 #include "common/plant.hpp"
 #include "common/rig.hpp"
 #include "control/controller/kalman.hpp"
+#include "control/controller/search.hpp"
 #include "control/controller/smith.hpp"
 
 namespace ptz::control {
@@ -49,6 +53,11 @@ struct ControllerParams {
   double rate_filter_s = 0.25;     // time constant Tv of the rate estimate (track)
   double max_setpoint_rate = 3.0;  // rad/s for pan and tilt; zoom ratio/s for zoom
   double lost_hold_s = 0.5;
+  std::string lost_mode = "search";  // "search" or "home"
+  double coast_s = 2.0;              // follow a lost target's prediction this long
+  double limit_wait_s = 3.0;         // wait this long for a target lost beyond an axis limit
+  double limit_margin_rad = 0.02;    // an aim this near a limit counts as at the limit
+  SearchParams search;
   double home_rate = 0.3;  // rad/s (pan, tilt) and ratio/s (zoom) when returning home
   double min_range_m = 0.3;
   double max_range_m = 50.0;
@@ -59,12 +68,25 @@ struct ControllerParams {
   KalmanParams kalman;
 };
 
-// What ptz-detect measured in one frame.
+// The target in one frame: what ptz-detect measured, or its track's prediction.
 struct Observation {
-  Eigen::Vector3d position_head_m;
+  Observation() = default;
+  Observation(const Eigen::Vector3d& position, double radius,
+              const Eigen::Matrix3d& covariance = Eigen::Matrix3d::Zero())
+      : position_head_m(position), radius_m(radius), covariance_m2(covariance) {}
+
+  Eigen::Vector3d position_head_m = Eigen::Vector3d::Zero();
   double radius_m = 0;                                      // <= 0: unknown (zoom holds)
   Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();  // zero: unknown
+  // From a track: its velocity and acceleration. The track mode's lead then takes the angular
+  // rate from the velocity (no filter lag on curves); without them, the filtered angular rate.
+  std::optional<Eigen::Vector3d> velocity_m_s;
+  Eigen::Vector3d acceleration_m_s2 = Eigen::Vector3d::Zero();
+  bool measured = true;  // false: the track coasts, this is its prediction
 };
+
+enum class ControlState { kTracking, kCoasting, kSearching, kHolding, kHoming };
+const char* controlStateName(ControlState s);
 
 class Controller {
  public:
@@ -75,10 +97,17 @@ class Controller {
   std::array<PtzPose, 2> update(double t_s, const std::optional<Observation>& target,
                                 const PtzPose& left_at_capture, const PtzPose& right_at_capture);
 
-  // Whether an observation is usable (finite, in front, within range); counted by callers.
-  bool plausible(const Observation& o) const;
+  // Whether an observation is usable: finite, in front of both cameras at capture and within
+  // range of each; counted by callers.
+  bool plausible(const Observation& o, const PtzPose& left_at_capture,
+                 const PtzPose& right_at_capture) const;
   const std::array<PtzPose, 2>& setpoint() const { return setpoint_; }
-  bool tracking() const { return tracking_; }
+  bool tracking() const { return state_ == ControlState::kTracking; }
+  ControlState state() const { return state_; }
+  const std::string& reason() const { return reason_; }
+  // Seconds since the target was last measured (since the first update when never).
+  double sinceTargetS() const { return since_target_s_; }
+  const Search& search() const { return search_; }
   // Smith mode: target positions the Kalman filter's gate threw out (wrong detections).
   int64_t outliersRejected() const { return outliers_rejected_; }
 
@@ -92,6 +121,12 @@ class Controller {
   void smithSent(double t_s, const PtzPose& left_at_capture, const PtzPose& right_at_capture);
   void slewTowards(const std::array<PtzPose, 2>& goal, double dt, double rate_angle,
                    double rate_zoom);
+  // The goal of both heads for a target (measured or predicted), before slewing and limits.
+  std::array<PtzPose, 2> follow(double t_s, const Observation& o, const PtzPose& left_at_capture,
+                                const PtzPose& right_at_capture, double dt);
+  bool beyondLimits(const std::array<PtzPose, 2>& goal) const;
+  void lost(double t_s, double dt);
+  void setState(ControlState s, std::string reason);
 
   StereoRig rig_;
   ControllerParams p_;
@@ -100,7 +135,14 @@ class Controller {
   std::array<Eigen::Vector2d, 2> rate_{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   std::optional<double> last_t_s_;
   std::optional<double> last_seen_t_s_;
-  bool tracking_ = false;
+  std::optional<double> first_t_s_;
+  std::optional<Eigen::Vector2d> last_seen_direction_;  // left setpoint (pan, tilt) when measured
+  bool tracking_ = false;  // the rate estimate of the track mode is running
+  bool lost_at_limit_ = false;
+  ControlState state_ = ControlState::kHolding;
+  std::string reason_ = "no target yet";
+  double since_target_s_ = 0;
+  Search search_;
   ConstantVelocityKalman kalman_;
   int64_t outliers_rejected_ = 0;
   std::array<SmithPredictor, 4> smith_;  // left pan, left tilt, right pan, right tilt

@@ -1,18 +1,27 @@
-// ptz-detect: STEREO_FRAME -> OBJECT_DETECTIONS + OBJECT_POSE. Always the newest fresh frame (those
-// waiting are drained, older ones dropped as superseded, late ones as stale); every output carries
-// the source frame's utime and seq; bad frames are dropped, counted and warned about, never fatal.
+// ptz-detect: STEREO_FRAME -> OBJECT_DETECTIONS + OBJECT_POSE + OBJECT_TRACKS. Always the newest
+// fresh frame (those waiting are drained, older ones dropped as superseded, late ones as stale);
+// every output carries the source frame's utime and seq; bad frames are dropped, counted and warned
+// about, never fatal. The tracker gives objects identities; the target is one track, locked until
+// it is gone (TARGET_SELECT changes it); OBJECT_POSE's target_index is that track's object when a
+// trusted measurement updated it in this frame.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/stereo.hpp"
+#include "perception/detect/target.hpp"
+#include "perception/detect/tracker.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace ptz::perception {
 namespace {
@@ -20,7 +29,8 @@ namespace {
 void declare(Params& p) {
   addTransportParams(p);
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
-  p.add("target_class", "red_ball", "class of the object of interest (OBJECT_POSE target_index)");
+  p.add("target_class", "red_ball",
+        "class of the object of interest until TARGET_SELECT says otherwise");
   p.add("filter_size_px", 3, "px", "median filter size (odd)", Range::between(1, 99));
   p.add("morph_size_px", 3, "px", "opening/closing kernel size", Range::between(1, 99));
   p.add("max_epipolar_px", 3.0, "px",
@@ -31,6 +41,35 @@ void declare(Params& p) {
   p.add("max_range_m", 50.0, "m", "farthest accepted object", Range::above(0));
   p.addOrder("min_range_m", "max_range_m");
   addFreshnessParams(p, "frame", 500.0, "a STEREO_FRAME");
+  addFreshnessParams(p, "select", 2000.0, "a TARGET_SELECT request");
+  const TrackerParams t;
+  p.add("track_jerk_psd_m2_s5", t.jerk_psd_m2_s5, "m^2/s^5",
+        "tracks: spectral density of the objects' jerk (constant-acceleration model)",
+        Range::above(0));
+  p.add("track_gate_chi2", t.gate_chi2, "",
+        "tracks: a measurement farther from a track's prediction (Mahalanobis^2) is not its",
+        Range::above(0));
+  p.add("track_min_position_sigma_m", t.min_position_sigma_m, "m",
+        "tracks: noise added to every triangulated position", Range::atLeast(0));
+  p.add("track_confirm_hits", t.confirm_hits, "", "tracks: measurements that confirm a track",
+        Range::between(1, 1000));
+  p.add("track_tentative_max_gap_s", t.tentative_max_gap_s, "s",
+        "tracks: an unconfirmed track unseen this long is deleted", Range::above(0));
+  p.add("track_coast_s", t.coast_s, "s",
+        "tracks: a confirmed track unseen this long is deleted (it coasts until then)",
+        Range::above(0));
+  p.add("track_recover_speed_m_s", t.recover_speed_m_s, "m/s",
+        "tracks: a measurement outside every gate but within this speed times the time since a "
+        "coasting track's last update restarts that track (sharp turns; 0: off)",
+        Range::atLeast(0));
+  p.add("track_max_radius_ratio", t.max_radius_ratio, "",
+        "tracks: a radius off the track's by more than this factor is not trusted as the centre",
+        Range::above(1));
+  p.add("trusted_area_ratio", 1.3, "",
+        "left/right area ratio (zoom-corrected) beyond which an object is not trusted as a centre",
+        Range::above(1));
+  p.add("pick_radius_px", 15.0, "px",
+        "TARGET_SELECT by image point: the largest distance from a track's image", Range::above(0));
   p.addSection("classes",
                "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
                "intensity_min, intensity_max, shape: circle|square|any, "
@@ -52,6 +91,55 @@ ptzstereo::detection_2d_t toMessage(const Region& r, const DetectorParams& dp) {
   return d;
 }
 
+TrackerParams trackerParams(const Params& p) {
+  TrackerParams t;
+  t.jerk_psd_m2_s5 = p.getDouble("track_jerk_psd_m2_s5");
+  t.gate_chi2 = p.getDouble("track_gate_chi2");
+  t.min_position_sigma_m = p.getDouble("track_min_position_sigma_m");
+  t.confirm_hits = p.getInt("track_confirm_hits");
+  t.tentative_max_gap_s = p.getDouble("track_tentative_max_gap_s");
+  t.coast_s = p.getDouble("track_coast_s");
+  t.max_radius_ratio = p.getDouble("track_max_radius_ratio");
+  t.recover_speed_m_s = p.getDouble("track_recover_speed_m_s");
+  return t;
+}
+
+std::vector<std::string> classNames(const DetectorParams& dp) {
+  std::vector<std::string> names;
+  for (const auto& c : dp.classes) names.push_back(c.name);
+  return names;
+}
+
+void copyMatrix(const Eigen::Matrix3d& m, double* out) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out[r * 3 + c] = m(r, c);
+  }
+}
+
+ptzstereo::object_track_t toMessage(const Track& t, double now_s) {
+  ptzstereo::object_track_t m{};
+  m.id = t.id;
+  m.class_name = t.class_name;
+  m.state = t.state == TrackState::kTentative   ? ptzstereo::object_track_t::STATE_TENTATIVE
+            : t.state == TrackState::kConfirmed ? ptzstereo::object_track_t::STATE_CONFIRMED
+                                                : ptzstereo::object_track_t::STATE_COASTING;
+  for (int i = 0; i < 3; ++i) {
+    m.position_m[i] = t.position()[i];
+    m.velocity_m_s[i] = t.velocity()[i];
+    m.acceleration_m_s2[i] = t.acceleration()[i];
+  }
+  copyMatrix(t.positionCovariance(), m.position_covariance_m2);
+  copyMatrix(t.velocityCovariance(), m.velocity_covariance_m2_s2);
+  m.radius_m = t.radius_m;
+  m.age_s = now_s - t.first_s;
+  m.since_update_s = now_s - t.last_update_s;
+  m.object_index = t.object_index;
+  m.untrusted_updates = t.untrusted_updates;
+  m.has_orientation = false;
+  m.orientation_wxyz[0] = 1;
+  return m;
+}
+
 class DetectNode {
  public:
   DetectNode(const Params& p, lcm::LCM* lcm, StereoRig rig, DetectorParams dp)
@@ -64,7 +152,13 @@ class DetectNode {
         frame_freshness_(freshnessFrom(p, "frame")),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_detections_(channel(p, channels::kObjectDetections)),
-        ch_pose_(channel(p, channels::kObjectPose)) {
+        ch_pose_(channel(p, channels::kObjectPose)),
+        ch_tracks_(channel(p, channels::kObjectTracks)),
+        ch_select_(channel(p, channels::kTargetSelect)),
+        select_freshness_(freshnessFrom(p, "select")),
+        tracker_(trackerParams(p)),
+        selector_(target_class_, classNames(detector_.params()), p.getDouble("pick_radius_px")),
+        trusted_area_ratio_(p.getDouble("trusted_area_ratio")) {
     stereo_.max_epipolar_px = p.getDouble("max_epipolar_px");
     stereo_.max_area_ratio = p.getDouble("max_area_ratio");
     stereo_.pixel_sigma_px = p.getDouble("pixel_sigma_px");
@@ -75,6 +169,9 @@ class DetectNode {
         *lcm_, ch_frame_, status_,
         [this](const std::string&, const ptzstereo::stereo_frame_t& m) { onFrame(&m); },
         Delivery::kNewest);
+    selects_ = std::make_unique<SafeSubscription<ptzstereo::target_select_t>>(
+        *lcm_, ch_select_, status_,
+        [this](const std::string&, const ptzstereo::target_select_t& m) { onSelect(m); });
     status_.expectInput(ch_frame_);
   }
 
@@ -147,6 +244,11 @@ class DetectNode {
     const CameraView rv =
         rig_.view(Side::kRight, {m->right.pan_rad, m->right.tilt_rad, m->right.zoom});
     const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
+    const double t_s = m->utime * 1e-6;
+    tracker_.update(t_s, trackMeasurements(objects, lr, rr, lv, rv, classNames(detector_.params()),
+                                           trusted_area_ratio_, tracker_.tracks(), t_s));
+    const int64_t target_id = chooseTarget(t_s);
+    last_views_ = {lv, rv};
     processing_ms_.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
 
@@ -175,22 +277,34 @@ class DetectNode {
       }
       obj.left_index = o.left;
       obj.right_index = o.right;
-      // Apparent radius of a disc of the region's area, back to metres at the object's range.
-      const double r_px = std::sqrt(lr[static_cast<size_t>(o.left)].area_px2 / M_PI);
-      obj.radius_m = r_px * (o.position_head_m - lv.position_head_m).norm() / lv.intrinsics.fx;
-      // The target: the largest region of the target class (regions come largest first).
-      if (obj.class_name == target_class_ &&
-          (pose.target_index < 0 ||
-           pose.objects[static_cast<size_t>(pose.target_index)].left_index > o.left)) {
-        pose.target_index = static_cast<int32_t>(pose.objects.size());
-      }
+      obj.radius_m = objectRadiusM(lr[static_cast<size_t>(o.left)], o.position_head_m, lv);
       pose.objects.push_back(obj);
     }
     pose.num_objects = static_cast<int32_t>(pose.objects.size());
+    // The target's object: the measurement that updated the locked track in this frame.
+    if (const Track* target = tracker_.find(target_id)) pose.target_index = target->object_index;
+
+    ptzstereo::object_tracks_t tracks{};
+    tracks.utime = m->utime;
+    tracks.frame_seq = m->seq;
+    tracks.left_ptz = pose.left_ptz;
+    tracks.right_ptz = pose.right_ptz;
+    tracks.target_id = target_id;
+    tracks.target_reason = selector_.reason();
+    for (const auto& t : tracker_.tracks()) tracks.tracks.push_back(toMessage(t, t_s));
+    tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
     det.publish_utime = wallUtime();
     status_.publish(ch_detections_, det, latencyMs(m->utime, det.publish_utime));
     pose.publish_utime = wallUtime();
     status_.publish(ch_pose_, pose, latencyMs(m->utime, pose.publish_utime));
+    tracks.publish_utime = wallUtime();
+    status_.publish(ch_tracks_, tracks, latencyMs(m->utime, tracks.publish_utime));
+    status_.setCounter("tracks_live", static_cast<int64_t>(tracker_.tracks().size()));
+    status_.setCounter("tracks_started", tracker_.tracksStarted());
+    status_.setCounter("tracks_recovered", tracker_.recoveries());
+    status_.setCounter("target_id", target_id);
+    for (const auto& [why, n] : tracker_.untrustedCounts())
+      status_.setCounter("untrusted_" + why, n);
     status_.increment("frames_processed");
     if (pose.target_index < 0) status_.increment("frames_without_target");
     if (processing_ms_.size() >= 30) {
@@ -202,6 +316,68 @@ class DetectNode {
     }
   }
 
+  // The selector's choice after this frame's tracker update; a new choice is said on stderr.
+  int64_t chooseTarget(double t_s) {
+    const int64_t before = selector_.targetId();
+    const std::string reason_before = selector_.reason();
+    const int64_t id = selector_.choose(t_s, tracker_.tracks());
+    if (id != before) status_.increment("target_changes");
+    if (selector_.reason() != reason_before) {
+      std::fprintf(stderr, "ptz-detect: target: %s\n", selector_.reason().c_str());
+    }
+    return id;
+  }
+
+  void refuseSelect(const std::string& why) {
+    status_.countDropped(ch_select_, "refused");
+    log_.warn("select",
+              "ptz-detect: TARGET_SELECT refused: " + why + "; the target stays " +
+                  (selector_.targetId() >= 0 ? "track " + std::to_string(selector_.targetId())
+                                             : std::string("none")));
+  }
+
+  void onSelect(const ptzstereo::target_select_t& m) {
+    const int64_t received = wallUtime();
+    const Freshness fresh =
+        judgeFreshness(m.utime, m.publish_utime, received, select_freshness_, true);
+    if (fresh != Freshness::kFresh) {
+      status_.countDropped(ch_select_, freshnessReason(fresh));
+      log_.warn("select",
+                std::string("ptz-detect: dropped a ") + freshnessReason(fresh) + " TARGET_SELECT");
+      return;
+    }
+    TargetRequest r;
+    switch (m.mode) {
+      case ptzstereo::target_select_t::MODE_CLASS:
+        r.mode = TargetRequest::Mode::kClass;
+        r.class_name = m.class_name;
+        break;
+      case ptzstereo::target_select_t::MODE_TRACK_ID:
+        r.mode = TargetRequest::Mode::kTrackId;
+        r.track_id = m.track_id;
+        break;
+      case ptzstereo::target_select_t::MODE_IMAGE_POINT:
+        if (m.camera != ptzstereo::target_select_t::CAMERA_LEFT &&
+            m.camera != ptzstereo::target_select_t::CAMERA_RIGHT) {
+          return refuseSelect("camera " + std::to_string(m.camera) + " is neither 0 nor 1");
+        }
+        if (!last_views_) return refuseSelect("no frame seen yet");
+        r.mode = TargetRequest::Mode::kImagePoint;
+        r.camera = m.camera == ptzstereo::target_select_t::CAMERA_LEFT ? Side::kLeft : Side::kRight;
+        r.pixel = {m.x_px, m.y_px};
+        break;
+      default:
+        return refuseSelect("mode " + std::to_string(m.mode) + " is none of 0, 1, 2");
+    }
+    std::string why;
+    const CameraView none;
+    const bool ok = selector_.request(r, tracker_.tracks(), last_views_ ? last_views_->first : none,
+                                      last_views_ ? last_views_->second : none, &why);
+    if (!ok) return refuseSelect(why);
+    status_.countIn(ch_select_, latencyMs(m.utime, received));
+    std::fprintf(stderr, "ptz-detect: target: %s\n", selector_.reason().c_str());
+  }
+
   lcm::LCM* lcm_;
   StatusReporter status_;
   RateLimitedLog log_;
@@ -211,9 +387,15 @@ class DetectNode {
   StereoParams stereo_;
   std::string target_class_;
   FreshnessLimits frame_freshness_;
-  std::string ch_frame_, ch_detections_, ch_pose_;
+  std::string ch_frame_, ch_detections_, ch_pose_, ch_tracks_, ch_select_;
+  FreshnessLimits select_freshness_;
+  Tracker tracker_;
+  TargetSelector selector_;
+  double trusted_area_ratio_;
+  std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
   std::vector<double> processing_ms_;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
+  std::unique_ptr<SafeSubscription<ptzstereo::target_select_t>> selects_;
 };
 
 }  // namespace

@@ -97,4 +97,119 @@ std::vector<StereoObject> associate(const std::vector<Region>& left,
   return out;
 }
 
+double objectRadiusM(const Region& region, const Eigen::Vector3d& position_head_m,
+                     const CameraView& view) {
+  const double r_px = std::sqrt(region.area_px2 / M_PI);
+  return r_px * (position_head_m - view.position_head_m).norm() / view.intrinsics.fx;
+}
+
+namespace {
+
+bool touchesBorder(const cv::Rect& box, const CameraView& view) {
+  return box.x <= 0 || box.y <= 0 || box.x + box.width >= view.width ||
+         box.y + box.height >= view.height;
+}
+
+// How many non-tentative tracks of a class have their predicted disc touching the region's box.
+int tracksUnder(const cv::Rect& box, const std::string& class_name,
+                const std::vector<Track>& tracks, double t_s, const CameraView& view) {
+  int n = 0;
+  for (const auto& t : tracks) {
+    if (t.state == TrackState::kTentative || t.class_name != class_name) continue;
+    const Eigen::Vector3d p = t.positionAt(t_s);
+    const Eigen::Vector2d px = view.project(p);
+    if (!px.allFinite()) continue;
+    const double range = (p - view.position_head_m).norm();
+    const double r_px = range > 0 ? view.intrinsics.fx * t.radius_m / range : 0;
+    const double dx = std::max({box.x - px.x(), 0.0, px.x() - (box.x + box.width)});
+    const double dy = std::max({box.y - px.y(), 0.0, px.y() - (box.y + box.height)});
+    if (std::hypot(dx, dy) <= r_px) ++n;
+  }
+  return n;
+}
+
+// A region as the shape it fills: a disc (centroid, half its box's larger side) when it fills
+// well under its box, as round things do (pi/4 of it), else the box itself.
+struct Extent {
+  bool disc = false;
+  Eigen::Vector2d centre;
+  double radius_px = 0;
+  cv::Rect box;
+};
+
+Extent extentOf(const Region& r) {
+  Extent e;
+  e.box = r.bbox;
+  const double box_area = static_cast<double>(r.bbox.width) * r.bbox.height;
+  e.disc = box_area > 0 && r.area_px2 / box_area < 0.9;
+  e.centre = {r.centroid_px.x, r.centroid_px.y};
+  e.radius_px = std::max(r.bbox.width, r.bbox.height) / 2.0;
+  return e;
+}
+
+double distanceToBox(const Eigen::Vector2d& p, const cv::Rect& b) {
+  const double dx = std::max({b.x - p.x(), 0.0, p.x() - (b.x + b.width)});
+  const double dy = std::max({b.y - p.y(), 0.0, p.y() - (b.y + b.height)});
+  return std::hypot(dx, dy);
+}
+
+// Whether two regions' shapes come within margin_px of each other.
+bool near(const Extent& a, const Extent& b, double margin_px) {
+  if (a.disc && b.disc)
+    return (a.centre - b.centre).norm() <= a.radius_px + b.radius_px + margin_px;
+  if (a.disc) return distanceToBox(a.centre, b.box) <= a.radius_px + margin_px;
+  if (b.disc) return distanceToBox(b.centre, a.box) <= b.radius_px + margin_px;
+  const cv::Rect grown(a.box.x - static_cast<int>(margin_px), a.box.y - static_cast<int>(margin_px),
+                       a.box.width + 2 * static_cast<int>(margin_px),
+                       a.box.height + 2 * static_cast<int>(margin_px));
+  return (grown & b.box).area() > 0;
+}
+
+// Whether a region comes within a margin of another region in the same image: one object may be
+// hiding part of the other, so neither centre is the object's.
+bool touchesAnother(const std::vector<Region>& regions, size_t index, int margin_px) {
+  const Extent e = extentOf(regions[index]);
+  for (size_t i = 0; i < regions.size(); ++i) {
+    if (i != index && near(e, extentOf(regions[i]), margin_px)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::vector<TrackMeasurement> trackMeasurements(
+    const std::vector<StereoObject>& objects, const std::vector<Region>& left,
+    const std::vector<Region>& right, const CameraView& left_view, const CameraView& right_view,
+    const std::vector<std::string>& class_names, double trusted_area_ratio,
+    const std::vector<Track>& tracks, double t_s) {
+  const double area_scale = std::pow(left_view.intrinsics.fx / right_view.intrinsics.fx, 2);
+  constexpr int kTouchMarginPx = 2;
+  std::vector<TrackMeasurement> out;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const StereoObject& o = objects[i];
+    const Region& l = left[static_cast<size_t>(o.left)];
+    const Region& r = right[static_cast<size_t>(o.right)];
+    TrackMeasurement m;
+    m.class_name = class_names[static_cast<size_t>(o.class_index)];
+    m.position_m = o.position_head_m;
+    m.covariance_m2 = o.covariance_m2;
+    m.radius_m = objectRadiusM(l, o.position_head_m, left_view);
+    m.object_index = static_cast<int>(i);
+    const double ratio = l.area_px2 / (r.area_px2 * area_scale);
+    if (touchesBorder(l.bbox, left_view) || touchesBorder(r.bbox, right_view)) {
+      m.untrusted = "border";
+    } else if (touchesAnother(left, static_cast<size_t>(o.left), kTouchMarginPx) ||
+               touchesAnother(right, static_cast<size_t>(o.right), kTouchMarginPx)) {
+      m.untrusted = "touching";
+    } else if (tracksUnder(l.bbox, m.class_name, tracks, t_s, left_view) >= 2 ||
+               tracksUnder(r.bbox, m.class_name, tracks, t_s, right_view) >= 2) {
+      m.untrusted = "overlap";
+    } else if (ratio > trusted_area_ratio || ratio < 1 / trusted_area_ratio) {
+      m.untrusted = "lr_area";
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
 }  // namespace ptz::perception

@@ -9,6 +9,7 @@
 
 #include "common/rig.hpp"
 #include "perception/detect/detector.hpp"
+#include "perception/detect/tracker.hpp"
 
 namespace ptz::perception {
 
@@ -47,5 +48,25 @@ Eigen::Matrix3d triangulationCovariance(const CameraView& left, const CameraView
 std::vector<StereoObject> associate(const std::vector<Region>& left,
                                     const std::vector<Region>& right, const CameraView& left_view,
                                     const CameraView& right_view, const StereoParams& params);
+
+// Physical radius of the object of a region: the apparent radius of a disc of the region's area,
+// back to metres at the object's range from the camera.
+double objectRadiusM(const Region& region, const Eigen::Vector3d& position_head_m,
+                     const CameraView& view);
+
+// The tracker's input: each object with the reason it cannot be trusted as the object's centre
+// ("border": its region touches an image border in either view; "touching": in either view its
+// shape (a disc for round regions, else its box) comes within 2 px of another region's, so one
+// may be hiding part of the other; "overlap":
+// in either view its
+// region covers the predicted images of two or more tracks of its class, i.e. objects merged into
+// one region, one hiding the other, whose triangulated centre is neither's; "lr_area": the areas
+// of the two views, corrected for their focal lengths, differ by more than trusted_area_ratio).
+// tracks: the tracker's tracks before this frame, predicted here to t_s.
+std::vector<TrackMeasurement> trackMeasurements(
+    const std::vector<StereoObject>& objects, const std::vector<Region>& left,
+    const std::vector<Region>& right, const CameraView& left_view, const CameraView& right_view,
+    const std::vector<std::string>& class_names, double trusted_area_ratio,
+    const std::vector<Track>& tracks, double t_s);
 
 }  // namespace ptz::perception

@@ -9,13 +9,16 @@
 
 #include "common/message_check.hpp"
 #include "common/transport.hpp"
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace {
 
@@ -49,6 +52,23 @@ void expectExact(const Msg& m) {
   EXPECT_FALSE(ptz::checkEncoding<Msg>(longer.data(), longer.size(), &why));
   EXPECT_NE(why.find("after the message"), std::string::npos) << why;
 }
+
+ptzstereo::object_tracks_t tracks(int n) {
+  ptzstereo::object_tracks_t m{};
+  m.target_id = -1;
+  m.target_reason = "locked";
+  m.tracks.resize(static_cast<size_t>(n));
+  m.num_tracks = n;
+  return m;
+}
+
+// In object_tracks_t: the fingerprint, three int64, two ptz_head_setpoint_t, target_id.
+constexpr size_t kTargetReasonAt = 8 + 3 * 8 + 2 * 3 * 8 + 8;
+// In target_select_t: the fingerprint, utime, publish_utime, mode.
+constexpr size_t kSelectClassNameAt = 8 + 2 * 8 + 1;
+// In control_state_t: the fingerprint, three int64, state, target_id, since_target_s, the two
+// waypoint counts.
+constexpr size_t kControlReasonAt = 8 + 3 * 8 + 1 + 2 * 8 + 2 * 4;
 
 ptzstereo::stereo_frame_t frame() {
   cv::Mat bgr(6, 8, CV_8UC3, cv::Scalar(10, 20, 30));
@@ -95,6 +115,27 @@ TEST(MessageCheck, EveryTypeAcceptedWholeAndRefusedCut) {
   truth.objects[0].name = "ball";
   truth.num_objects = 2;
   expectExact(truth);
+  ptzstereo::object_tracks_t tr = tracks(2);
+  tr.tracks[0].class_name = "red_ball";
+  tr.tracks[1].has_orientation = true;
+  tr.target_id = 3;
+  expectExact(tr);
+  // One track of an empty name: num_tracks exactly fills the bytes left (the smallest track).
+  expectExact(tracks(1));
+  expectExact(tracks(0));
+  ptzstereo::target_select_t select{};
+  select.mode = ptzstereo::target_select_t::MODE_CLASS;
+  select.class_name = "red_ball";
+  expectExact(select);
+  expectExact(ptzstereo::target_select_t{});
+  ptzstereo::control_state_t control{};
+  control.state = ptzstereo::control_state_t::STATE_SEARCHING;
+  control.target_id = -1;
+  control.search_waypoint = 2;
+  control.search_waypoints = 8;
+  control.reason = "no target: searching, waypoint 3 of 8";
+  expectExact(control);
+  expectExact(ptzstereo::control_state_t{});
 }
 
 TEST(MessageCheck, CountsLargerThanTheBytesBehindThemAreRefusedBeforeAllocation) {
@@ -115,6 +156,19 @@ TEST(MessageCheck, CountsLargerThanTheBytesBehindThemAreRefusedBeforeAllocation)
   putInt32(&p, p.size() - 4, 10'000'000);  // num_objects is the last field of an empty pose
   EXPECT_FALSE(ptz::decodeChecked(p.data(), p.size(), &pose, &why));
   EXPECT_EQ(pose.objects.capacity(), 0u);
+
+  ptzstereo::object_tracks_t tr = tracks(0);
+  std::vector<uint8_t> t = bytesOf(tr);
+  putInt32(&t, t.size() - 4, 10'000'000);  // num_tracks is the last field without tracks
+  EXPECT_FALSE(ptz::decodeChecked(t.data(), t.size(), &tr, &why));
+  EXPECT_NE(why.find("num_tracks = 10000000"), std::string::npos) << why;
+  EXPECT_EQ(tr.tracks.capacity(), 0u) << "allocated for a count the bytes do not hold";
+  // One track's bytes behind a count of two (a track takes at least 367 bytes).
+  t = bytesOf(tracks(1));
+  putInt32(&t, kTargetReasonAt + 4 + 7, 2);
+  EXPECT_FALSE(ptz::decodeChecked(t.data(), t.size(), &tr, &why));
+  EXPECT_NE(why.find("num_tracks = 2 but only 367 bytes follow"), std::string::npos) << why;
+  EXPECT_EQ(tr.tracks.capacity(), 0u);
 
   // A string length of 0 (lcm-gen would assign length -1) and one past the end.
   ptzstereo::process_status_t status{};
@@ -217,4 +271,68 @@ TEST(MessageCheck, BothImagesOfAFrameAreCheckedAlike) {
   f.left.width = 5000;
   EXPECT_FALSE(ptz::checkStereoFrame(f, ptz::kMaxImageSidePx, &why));
   EXPECT_EQ(why.rfind("left image: size 5000x6", 0), 0u) << why;
+}
+
+TEST(MessageCheck, TracksAndTargetSelectStringsAreOneNulTerminatedString) {
+  std::string why;
+  // target_reason "locked": length 7, its NUL at kTargetReasonAt + 4 + 6.
+  const std::vector<uint8_t> good = bytesOf(tracks(1));
+  std::vector<uint8_t> t = good;
+  putInt32(&t, kTargetReasonAt, 0);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::object_tracks_t>(t.data(), t.size(), &why));
+  EXPECT_NE(why.find("target_reason has length 0"), std::string::npos) << why;
+  putInt32(&t, kTargetReasonAt, 1 << 30);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::object_tracks_t>(t.data(), t.size(), &why));
+  t = good;
+  t[kTargetReasonAt + 4 + 6] = 'x';
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::object_tracks_t>(t.data(), t.size(), &why));
+  EXPECT_NE(why.find("target_reason is not one NUL-terminated"), std::string::npos) << why;
+  // The track's class_name (empty: length 1) after the count and the track's id.
+  t = good;
+  t[kTargetReasonAt + 4 + 7 + 4 + 8 + 4] = 'x';
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::object_tracks_t>(t.data(), t.size(), &why));
+  EXPECT_NE(why.find("tracks.class_name"), std::string::npos) << why;
+
+  ptzstereo::target_select_t select{};
+  select.class_name = "box";
+  const std::vector<uint8_t> s = bytesOf(select);
+  std::vector<uint8_t> bad = s;
+  putInt32(&bad, kSelectClassNameAt, 0);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::target_select_t>(bad.data(), bad.size(), &why));
+  putInt32(&bad, kSelectClassNameAt, 1 << 30);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::target_select_t>(bad.data(), bad.size(), &why));
+  EXPECT_NE(why.find("class_name runs past the end"), std::string::npos) << why;
+  bad = s;
+  bad[kSelectClassNameAt + 4 + 1] = 0;  // 'b', NUL, 'x', NUL: a NUL inside
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::target_select_t>(bad.data(), bad.size(), &why));
+  EXPECT_NE(why.find("class_name is not one NUL-terminated"), std::string::npos) << why;
+  ptzstereo::target_select_t back;
+  EXPECT_TRUE(ptz::decodeChecked(s.data(), s.size(), &back, &why)) << why;
+  EXPECT_EQ(back.class_name, "box");
+}
+
+TEST(MessageCheck, ControlStateReasonIsOneNulTerminatedString) {
+  ptzstereo::control_state_t m{};
+  m.reason = "coasting";
+  const std::vector<uint8_t> good = bytesOf(m);
+  ASSERT_EQ(good.size(), kControlReasonAt + 4 + 9);
+  std::string why;
+  std::vector<uint8_t> bad = good;
+  putInt32(&bad, kControlReasonAt, 0);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::control_state_t>(bad.data(), bad.size(), &why));
+  EXPECT_NE(why.find("reason has length 0"), std::string::npos) << why;
+  putInt32(&bad, kControlReasonAt, 1 << 30);
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::control_state_t>(bad.data(), bad.size(), &why));
+  EXPECT_NE(why.find("reason runs past the end"), std::string::npos) << why;
+  bad = good;
+  bad[kControlReasonAt + 4 + 8] = 'x';  // the terminator
+  EXPECT_FALSE(ptz::checkEncoding<ptzstereo::control_state_t>(bad.data(), bad.size(), &why));
+  EXPECT_NE(why.find("reason is not one NUL-terminated"), std::string::npos) << why;
+  bad = good;
+  bad[kControlReasonAt + 4 + 3] = 0;  // "coa", NUL, "ting", NUL: a NUL inside
+  ptzstereo::control_state_t back;
+  EXPECT_FALSE(ptz::decodeChecked(bad.data(), bad.size(), &back, &why));
+  EXPECT_NE(why.find("reason is not one NUL-terminated"), std::string::npos) << why;
+  EXPECT_TRUE(ptz::decodeChecked(good.data(), good.size(), &back, &why)) << why;
+  EXPECT_EQ(back.reason, "coasting");
 }

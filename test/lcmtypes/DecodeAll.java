@@ -43,6 +43,20 @@ public class DecodeAll {
         == 300, "status counter");
     failed += check(((ptzstereo.object_pose_t) decoded.get("object_pose_t")).objects[0].position_m[2]
         == 3.0, "pose z");
+    ptzstereo.object_tracks_t tracks = (ptzstereo.object_tracks_t) decoded.get("object_tracks_t");
+    failed += check(tracks.num_tracks == 2 && tracks.tracks[1].id == 8 && tracks.target_id == 7
+        && tracks.tracks[0].state == ptzstereo.object_track_t.STATE_COASTING
+        && tracks.tracks[0].has_orientation && tracks.tracks[0].velocity_m_s[0] == -0.25
+        && tracks.target_reason.equals("locked on track 7 (green_box) by track id"), "tracks");
+    ptzstereo.target_select_t select = (ptzstereo.target_select_t) decoded.get("target_select_t");
+    failed += check(select.mode == ptzstereo.target_select_t.MODE_IMAGE_POINT
+        && select.camera == ptzstereo.target_select_t.CAMERA_RIGHT && select.x_px == 412.5
+        && select.frame_seq == -1, "target select");
+    ptzstereo.control_state_t control =
+        (ptzstereo.control_state_t) decoded.get("control_state_t");
+    failed += check(control.state == ptzstereo.control_state_t.STATE_COASTING
+        && control.target_id == 7 && control.since_target_s == 0.25 && control.search_waypoint == -1
+        && control.reason.equals("target hidden: following its prediction"), "control state");
     if (decoded.size() != Integer.parseInt(args[1])) {
       System.out.println("FAIL expected " + args[1] + " types, decoded " + decoded.size());
       failed++;

@@ -7,14 +7,17 @@
 #include <vector>
 
 #include "common/transport.hpp"
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace {
 
@@ -106,6 +109,112 @@ TEST(LcmTypes, DetectionsAndPoseRoundTrip) {
   auto pout = roundTrip(p);
   EXPECT_DOUBLE_EQ(pout.objects[0].position_m[2], 3.0);
   EXPECT_DOUBLE_EQ(pout.objects[0].covariance_m2[8], 1e-4);
+}
+
+TEST(LcmTypes, TracksAndTargetSelectRoundTrip) {
+  ptzstereo::object_tracks_t m{};
+  m.utime = 1234567;
+  m.frame_seq = 7;
+  m.left_ptz.zoom = 2.5;
+  m.target_id = 3;
+  m.target_reason = "locked on track 3 (red_ball) by class";
+  ptzstereo::object_track_t t{};
+  t.id = 3;
+  t.class_name = "red_ball";
+  t.state = ptzstereo::object_track_t::STATE_CONFIRMED;
+  t.position_m[2] = 3.0;
+  t.position_covariance_m2[8] = 1e-4;
+  t.velocity_m_s[0] = 0.4;
+  t.velocity_covariance_m2_s2[4] = 1e-2;
+  t.acceleration_m_s2[1] = -0.5;
+  t.radius_m = 0.1;
+  t.age_s = 5.25;
+  t.since_update_s = 0.125;
+  t.object_index = 1;
+  t.untrusted_updates = 2;
+  m.tracks = {t, t};
+  m.tracks[1].id = 4;
+  m.tracks[1].class_name = "green_box";
+  m.tracks[1].state = ptzstereo::object_track_t::STATE_COASTING;
+  m.tracks[1].object_index = -1;
+  m.tracks[1].has_orientation = true;
+  m.tracks[1].orientation_wxyz[0] = 0.5;
+  m.tracks[1].orientation_wxyz[3] = -0.5;
+  m.tracks[1].orientation_covariance_rad2[8] = 0.01;
+  m.num_tracks = 2;
+  auto out = roundTrip(m);
+  EXPECT_EQ(out.frame_seq, 7);
+  EXPECT_DOUBLE_EQ(out.left_ptz.zoom, 2.5);
+  EXPECT_EQ(out.target_id, 3);
+  EXPECT_EQ(out.target_reason, "locked on track 3 (red_ball) by class");
+  ASSERT_EQ(out.num_tracks, 2);
+  ASSERT_EQ(out.tracks.size(), 2u);
+  const ptzstereo::object_track_t& a = out.tracks[0];
+  EXPECT_EQ(a.id, 3);
+  EXPECT_EQ(a.class_name, "red_ball");
+  EXPECT_EQ(a.state, ptzstereo::object_track_t::STATE_CONFIRMED);
+  EXPECT_DOUBLE_EQ(a.position_m[2], 3.0);
+  EXPECT_DOUBLE_EQ(a.position_covariance_m2[8], 1e-4);
+  EXPECT_DOUBLE_EQ(a.velocity_m_s[0], 0.4);
+  EXPECT_DOUBLE_EQ(a.velocity_covariance_m2_s2[4], 1e-2);
+  EXPECT_DOUBLE_EQ(a.acceleration_m_s2[1], -0.5);
+  EXPECT_DOUBLE_EQ(a.radius_m, 0.1);
+  EXPECT_DOUBLE_EQ(a.age_s, 5.25);
+  EXPECT_DOUBLE_EQ(a.since_update_s, 0.125);
+  EXPECT_EQ(a.object_index, 1);
+  EXPECT_EQ(a.untrusted_updates, 2);
+  EXPECT_FALSE(a.has_orientation);
+  const ptzstereo::object_track_t& b = out.tracks[1];
+  EXPECT_EQ(b.id, 4);
+  EXPECT_EQ(b.class_name, "green_box");
+  EXPECT_EQ(b.state, ptzstereo::object_track_t::STATE_COASTING);
+  EXPECT_EQ(b.object_index, -1);
+  EXPECT_TRUE(b.has_orientation);
+  EXPECT_DOUBLE_EQ(b.orientation_wxyz[0], 0.5);
+  EXPECT_DOUBLE_EQ(b.orientation_wxyz[3], -0.5);
+  EXPECT_DOUBLE_EQ(b.orientation_covariance_rad2[8], 0.01);
+
+  ptzstereo::target_select_t s{};
+  s.utime = 99;
+  s.mode = ptzstereo::target_select_t::MODE_IMAGE_POINT;
+  s.class_name = "red_ball";
+  s.track_id = -1;
+  s.camera = ptzstereo::target_select_t::CAMERA_RIGHT;
+  s.x_px = 412.5;
+  s.y_px = 230.25;
+  s.frame_seq = -1;
+  auto sout = roundTrip(s);
+  EXPECT_EQ(sout.utime, 99);
+  EXPECT_EQ(sout.mode, ptzstereo::target_select_t::MODE_IMAGE_POINT);
+  EXPECT_EQ(sout.class_name, "red_ball");
+  EXPECT_EQ(sout.track_id, -1);
+  EXPECT_EQ(sout.camera, ptzstereo::target_select_t::CAMERA_RIGHT);
+  EXPECT_DOUBLE_EQ(sout.x_px, 412.5);
+  EXPECT_DOUBLE_EQ(sout.y_px, 230.25);
+  EXPECT_EQ(sout.frame_seq, -1);
+}
+
+TEST(LcmTypes, ControlStateRoundTrip) {
+  ptzstereo::control_state_t m{};
+  m.utime = 1234567;
+  m.publish_utime = 1256789;
+  m.frame_seq = 7;
+  m.state = ptzstereo::control_state_t::STATE_SEARCHING;
+  m.target_id = -1;
+  m.since_target_s = 1.5;
+  m.search_waypoint = 2;
+  m.search_waypoints = 8;
+  m.reason = "no target: searching, waypoint 3 of 8";
+  auto out = roundTrip(m);
+  EXPECT_EQ(out.utime, 1234567);
+  EXPECT_EQ(out.publish_utime, 1256789);
+  EXPECT_EQ(out.frame_seq, 7);
+  EXPECT_EQ(out.state, ptzstereo::control_state_t::STATE_SEARCHING);
+  EXPECT_EQ(out.target_id, -1);
+  EXPECT_DOUBLE_EQ(out.since_target_s, 1.5);
+  EXPECT_EQ(out.search_waypoint, 2);
+  EXPECT_EQ(out.search_waypoints, 8);
+  EXPECT_EQ(out.reason, "no target: searching, waypoint 3 of 8");
 }
 
 TEST(LcmTypes, PointCloudTruthStatusRoundTrip) {

@@ -8,12 +8,15 @@
 
 #include "ptzstereo/camera_model_t.hpp"
 #include "ptzstereo/channel_status_t.hpp"
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/counter_t.hpp"
 #include "ptzstereo/detection_2d_t.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/object_3d_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_track_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "ptzstereo/point_field_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
@@ -24,6 +27,7 @@
 #include "ptzstereo/sim_object_truth_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
 
 namespace {
 
@@ -99,6 +103,36 @@ int main(int argc, char** argv) {
   pose.num_objects = 1;
   pose.objects = {obj};
   write("object_pose_t", pose);
+  object_track_t track{};
+  track.id = 7;
+  track.class_name = "green_box";
+  track.state = object_track_t::STATE_COASTING;
+  track.velocity_m_s[0] = -0.25;
+  track.has_orientation = true;
+  track.orientation_wxyz[0] = 1;
+  write("object_track_t", track);
+  object_tracks_t tracks{};
+  tracks.frame_seq = 42;
+  tracks.target_id = 7;
+  tracks.target_reason = "locked on track 7 (green_box) by track id";
+  tracks.num_tracks = 2;
+  tracks.tracks = {track, track};
+  tracks.tracks[1].id = 8;
+  write("object_tracks_t", tracks);
+  target_select_t select{};
+  select.mode = target_select_t::MODE_IMAGE_POINT;
+  select.camera = target_select_t::CAMERA_RIGHT;
+  select.x_px = 412.5;
+  select.frame_seq = -1;
+  write("target_select_t", select);
+  control_state_t control{};
+  control.frame_seq = 42;
+  control.state = control_state_t::STATE_COASTING;
+  control.target_id = 7;
+  control.since_target_s = 0.25;
+  control.search_waypoint = -1;
+  control.reason = "target hidden: following its prediction";
+  write("control_state_t", control);
   point_field_t field{};
   field.name = "x";
   field.datatype = point_field_t::FLOAT32;

@@ -24,6 +24,7 @@ struct Listener {
   std::map<std::string, std::map<std::string, int64_t>> counters;  // process -> counter
   std::map<std::string, std::string> warnings;  // process -> its last WARN message
   std::vector<ptzstereo::sim_truth_t> truths;
+  int64_t first_target_seq = -1;  // the first frame whose pose has a target (the acquisition)
 
   void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
     metrics.onTruth(*m);
@@ -31,10 +32,15 @@ struct Listener {
   }
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
     metrics.onPose(*m);
+    if (first_target_seq < 0 && m->target_index >= 0) first_target_seq = m->frame_seq;
   }
   void onSetpoint(const lcm::ReceiveBuffer*, const std::string&,
                   const ptzstereo::ptz_setpoint_t* m) {
     metrics.onSetpoint(*m);
+  }
+  void onControlState(const lcm::ReceiveBuffer*, const std::string&,
+                      const ptzstereo::control_state_t* m) {
+    metrics.onControlState(*m);
   }
   void onStatus(const lcm::ReceiveBuffer*, const std::string&,
                 const ptzstereo::process_status_t* m) {
@@ -48,16 +54,20 @@ struct Listener {
 
 // Starts ptz-detect and ptz-control, waits until both are up, runs ptz-sim to its end.
 inline std::unique_ptr<Listener> runLoop(const std::vector<std::string>& sim_args,
-                                         const std::vector<std::string>& control_args) {
+                                         const std::vector<std::string>& control_args,
+                                         const std::vector<std::string>& detect_args = {}) {
   using namespace std::chrono_literals;
   lcm::LCM lcm(kTestUrl);
   auto l = std::make_unique<Listener>();
   lcm.subscribe("SIM_TRUTH", &Listener::onTruth, l.get());
   lcm.subscribe("OBJECT_POSE", &Listener::onPose, l.get());
   lcm.subscribe("PTZ_SETPOINT", &Listener::onSetpoint, l.get());
+  lcm.subscribe("CONTROL_STATE", &Listener::onControlState, l.get());
   lcm.subscribe("PROCESS_STATUS_.*", &Listener::onStatus, l.get());
-  ChildProcess detect(
-      {PTZ_DETECT_BIN, "--lcm-url", kTestUrl, "--config", kConfig + "detect_default.yaml"});
+  std::vector<std::string> detect_cmd = {PTZ_DETECT_BIN, "--lcm-url", kTestUrl, "--config",
+                                         kConfig + "detect_default.yaml"};
+  detect_cmd.insert(detect_cmd.end(), detect_args.begin(), detect_args.end());
+  ChildProcess detect(detect_cmd);
   std::vector<std::string> control_cmd = {PTZ_CONTROL_BIN, "--lcm-url", kTestUrl};
   control_cmd.insert(control_cmd.end(), control_args.begin(), control_args.end());
   ChildProcess control(control_cmd);

@@ -24,7 +24,8 @@ struct Tracking {
   int64_t outside = 0;  // frames with the target outside an image
 };
 
-Tracking runFigureEight(double dead_time_s, int frames, const std::vector<std::string>& control) {
+Tracking runFigureEight(double dead_time_s, int frames, const std::vector<std::string>& control,
+                        bool expect_in_view = true) {
   const std::string tau = std::to_string(dead_time_s);
   std::vector<std::string> control_args = {"--dead-time-s", tau};
   control_args.insert(control_args.end(), control.begin(), control.end());
@@ -50,7 +51,10 @@ Tracking runFigureEight(double dead_time_s, int frames, const std::vector<std::s
   t.early_rms_px = n_early ? std::sqrt(early / n_early) : NAN;
   t.late_rms_px = n_late ? std::sqrt(late / n_late) : NAN;
   t.outside = run->metrics.summary().frames_target_outside_image;
-  EXPECT_GE(n, (frames - from) * 9 / 10) << "the target was not seen in most frames";
+  // An unstable loop swings the heads away (the target then behind a camera has no centring).
+  if (expect_in_view) {
+    EXPECT_GE(n, (frames - from) * 9 / 10) << "the target was not seen in most frames";
+  }
   return t;
 }
 
@@ -66,9 +70,12 @@ TEST(DelayCompensation, SmithTracksAFigureEightAtOneSecondOfDelay) {
   EXPECT_EQ(smith.outside, 0);
 
   // The paper's loop at the same delay (zoom held, so the ball stays in view longer): unstable,
-  // its oscillation grows until the ball leaves the image.
-  const Tracking paper = runFigureEight(
-      1.0, 450, {"--mode", "paper", "--zoom-mode", "hold", "--max-setpoint-rate", "100"});
+  // its oscillation grows until the ball leaves the image. (Lost, the heads go home rather than
+  // search: this compares loops, not searches.)
+  const Tracking paper = runFigureEight(1.0, 450,
+                                        {"--mode", "paper", "--zoom-mode", "hold",
+                                         "--max-setpoint-rate", "100", "--lost-mode", "home"},
+                                        false);
   std::printf("tau 1 s, paper: %.2f px RMS (first third %.2f, last %.2f), outside %lld\n",
               paper.rms_px, paper.early_rms_px, paper.late_rms_px,
               static_cast<long long>(paper.outside));

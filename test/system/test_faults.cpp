@@ -15,6 +15,7 @@
 
 #include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
@@ -198,7 +199,9 @@ TEST_F(Faults, ASmallMessageCannotMakeDetectAllocateOrStall) {
   EXPECT_LT(rss_after_kb - rss_before_kb, 64 * 1024);
 }
 
-TEST_F(Faults, APoseWithTenMillionObjectsCostsControlAndDepthNothing) {
+// ptz-depth reads OBJECT_POSE, ptz-control OBJECT_TRACKS: each gets its own message whose count
+// (the last field of an empty message) says ten million.
+TEST_F(Faults, AMessageOfTenMillionObjectsCostsControlAndDepthNothing) {
   ChildProcess control({PTZ_CONTROL_BIN, "--lcm-url", kTestUrl, "--status-period-s", "0.05"});
   ChildProcess depth({PTZ_DEPTH_BIN, "--lcm-url", kTestUrl, "--status-period-s", "0.05"});
   ASSERT_TRUE(up({"ptz-control", "ptz-depth"}));
@@ -206,22 +209,24 @@ TEST_F(Faults, APoseWithTenMillionObjectsCostsControlAndDepthNothing) {
   const int64_t depth_before_kb = peakRssKb(depth.pid());
   ASSERT_GT(control_before_kb, 0);
   ASSERT_GT(depth_before_kb, 0);
-  ptzstereo::object_pose_t pose{};
-  std::vector<uint8_t> b = bytesOf(pose);
-  putInt32(&b, b.size() - 4, 10'000'000);
+  std::vector<uint8_t> pose = bytesOf(ptzstereo::object_pose_t{});
+  putInt32(&pose, pose.size() - 4, 10'000'000);
+  std::vector<uint8_t> tracks = bytesOf(ptzstereo::object_tracks_t{});
+  putInt32(&tracks, tracks.size() - 4, 10'000'000);
   // One at a time, each counted by both before the next.
   for (int i = 1; i <= 5; ++i) {
-    lcm.publish("OBJECT_POSE", b.data(), static_cast<unsigned>(b.size()));
+    lcm.publish("OBJECT_POSE", pose.data(), static_cast<unsigned>(pose.size()));
+    lcm.publish("OBJECT_TRACKS", tracks.data(), static_cast<unsigned>(tracks.size()));
     ASSERT_TRUE(ptz::test::handleUntil(
         lcm,
         [&] {
-          return w.counter("ptz-control", "dropped_undecodable") == i &&
-                 w.counter("ptz-depth", "dropped_undecodable") == i;
+          return w.counter("ptz-control", "OBJECT_TRACKS.dropped_undecodable") == i &&
+                 w.counter("ptz-depth", "OBJECT_POSE.dropped_undecodable") == i;
         },
         20s))
         << "message " << i << ": ptz-control counted "
-        << w.counter("ptz-control", "dropped_undecodable") << ", ptz-depth "
-        << w.counter("ptz-depth", "dropped_undecodable");
+        << w.counter("ptz-control", "OBJECT_TRACKS.dropped_undecodable") << ", ptz-depth "
+        << w.counter("ptz-depth", "OBJECT_POSE.dropped_undecodable");
   }
   EXPECT_LT(peakRssKb(control.pid()) - control_before_kb, 16 * 1024);
   EXPECT_LT(peakRssKb(depth.pid()) - depth_before_kb, 16 * 1024);
@@ -309,8 +314,8 @@ TEST_F(Faults, AfterAPauseTheFirstAnswersAreToFreshFrames) {
   EXPECT_GT(w.counter("ptz-detect", "STEREO_FRAME.dropped_stale") +
                 w.counter("ptz-detect", "STEREO_FRAME.dropped_superseded"),
             0);
-  EXPECT_GT(w.counter("ptz-control", "OBJECT_POSE.dropped_stale") +
-                w.counter("ptz-control", "OBJECT_POSE.dropped_superseded"),
+  EXPECT_GT(w.counter("ptz-control", "OBJECT_TRACKS.dropped_stale") +
+                w.counter("ptz-control", "OBJECT_TRACKS.dropped_superseded"),
             0);
 }
 
@@ -359,7 +364,7 @@ TEST_F(Faults, ProcessesSayWhenTheirInputStops) {
       20s));
   EXPECT_EQ(w.status["ptz-detect"].message.rfind("no STEREO_FRAME for ", 0), 0u)
       << w.status["ptz-detect"].message;
-  EXPECT_EQ(w.status["ptz-control"].message.rfind("no OBJECT_POSE for ", 0), 0u)
+  EXPECT_EQ(w.status["ptz-control"].message.rfind("no OBJECT_TRACKS for ", 0), 0u)
       << w.status["ptz-control"].message;
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm,
@@ -368,7 +373,7 @@ TEST_F(Faults, ProcessesSayWhenTheirInputStops) {
       },
       20s));
   EXPECT_EQ(w.status["ptz-detect"].message, "no STEREO_FRAME for 5 s");
-  // Input again: OK again (the frame's pose feeds ptz-control too).
+  // Input again: OK again (the frame's tracks message feeds ptz-control too).
   ASSERT_TRUE(answered(lcm, w, 1, 5s));
   EXPECT_TRUE(ptz::test::handleUntil(
       lcm,

@@ -6,6 +6,8 @@
 // names and renamed at the end; a damaged log is summarised as far as it reads, with a warning.
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -23,6 +25,48 @@ struct ChannelStats {
   int64_t first_utime = 0;
   int64_t last_utime = 0;
 };
+
+// The heads' true pan, tilt, zoom (left, right) at a frame's capture time.
+struct Heads {
+  int64_t utime = 0;
+  std::array<double, 6> v{};
+};
+
+// A name from the log as one CSV field: quoted when it holds a separator, quote or line break.
+std::string csvField(const std::string& s) {
+  if (s.find_first_of(",\"\r\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+const char* controlStateName(int state) {
+  static const char* const kNames[] = {"tracking", "coasting", "searching", "holding", "homing"};
+  return state >= 0 && state < 5 ? kNames[state] : "";
+}
+
+// Per frame with truth: the heads' true pan/tilt/zoom, then how the frame was scored (whether
+// it had a pose and a target, the true object tracked, ptz-control's state).
+void writeCsv(FILE* csv, const std::map<int64_t, Heads>& heads,
+              const std::map<int64_t, ptz::tools::FrameScore>& frames) {
+  std::fprintf(csv,
+               "t_s,frame_seq,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,"
+               "right_tilt_rad,right_zoom,pose,target,tracked_object,control_state\n");
+  int64_t first_utime = 0;
+  for (const auto& [seq, t] : heads) {
+    first_utime = seq == heads.begin()->first ? t.utime : std::min(first_utime, t.utime);
+  }
+  for (const auto& [seq, t] : heads) {
+    const auto f = frames.find(seq);
+    const ptz::tools::FrameScore none;
+    const ptz::tools::FrameScore& s = f == frames.end() ? none : f->second;
+    std::fprintf(csv, "%.6f,%lld,%.9f,%.9f,%.6f,%.9f,%.9f,%.6f,%d,%d,%s,%s\n",
+                 (static_cast<double>(t.utime) - static_cast<double>(first_utime)) * 1e-6,
+                 static_cast<long long>(seq), t.v[0], t.v[1], t.v[2], t.v[3], t.v[4], t.v[5],
+                 s.pose ? 1 : 0, s.target ? 1 : 0, csvField(s.tracked).c_str(),
+                 controlStateName(s.control_state));
+  }
+}
 
 // The summary; returns the exit code. Throws LogError for a log it cannot use.
 int summarise(const ptz::Params& p) {
@@ -46,14 +90,11 @@ int summarise(const ptz::Params& p) {
       throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
                                  "cannot write '" + p.getString("csv") + "'");
     }
-    std::fprintf(csv,
-                 "t_s,frame_seq,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,"
-                 "right_tilt_rad,right_zoom\n");
   }
   // Closed on every way out (the temporary file itself is removed by csv_file).
   const std::unique_ptr<FILE, int (*)(FILE*)> csv_closer(
       csv, [](FILE* f) { return f ? std::fclose(f) : 0; });
-  int64_t first_truth_utime = -1;
+  std::map<int64_t, Heads> heads;  // by seq: the CSV is written at the end, in frame order
   while (const lcm::LogEvent* ev = log.next()) {
     ChannelStats& c = channels[ev->channel];
     if (c.messages == 0) c.first_utime = ev->timestamp;
@@ -72,11 +113,10 @@ int summarise(const ptz::Params& p) {
       if (!ptz::tools::decodeEvent(*ev, &t, &undecodable)) continue;
       metrics.onTruth(t);
       if (csv) {
-        if (first_truth_utime < 0) first_truth_utime = t.utime;
-        std::fprintf(csv, "%.6f,%lld,%.9f,%.9f,%.6f,%.9f,%.9f,%.6f\n",
-                     (t.utime - first_truth_utime) * 1e-6, static_cast<long long>(t.frame_seq),
-                     t.left_head.pan_rad, t.left_head.tilt_rad, t.left_head.zoom,
-                     t.right_head.pan_rad, t.right_head.tilt_rad, t.right_head.zoom);
+        heads.emplace(t.frame_seq,
+                      Heads{t.utime,
+                            {t.left_head.pan_rad, t.left_head.tilt_rad, t.left_head.zoom,
+                             t.right_head.pan_rad, t.right_head.tilt_rad, t.right_head.zoom}});
       }
     } else if (ch == prefix + "OBJECT_POSE") {
       ptzstereo::object_pose_t m;
@@ -84,6 +124,9 @@ int summarise(const ptz::Params& p) {
     } else if (ch == prefix + "PTZ_SETPOINT") {
       ptzstereo::ptz_setpoint_t m;
       if (ptz::tools::decodeEvent(*ev, &m, &undecodable)) metrics.onSetpoint(m);
+    } else if (ch == prefix + "CONTROL_STATE") {
+      ptzstereo::control_state_t m;
+      if (ptz::tools::decodeEvent(*ev, &m, &undecodable)) metrics.onControlState(m);
     } else if (ch.rfind(prefix + "PROCESS_STATUS_", 0) == 0) {
       ptzstereo::process_status_t s;
       if (!ptz::tools::decodeEvent(*ev, &s, &undecodable)) continue;
@@ -135,6 +178,7 @@ int summarise(const ptz::Params& p) {
     json_file->commit();
   }
   if (csv_file) {
+    writeCsv(csv, heads, metrics.frames());
     if (std::fflush(csv) != 0) {
       throw ptz::tools::LogError(ptz::tools::log_exit::kOutput,
                                  "cannot write '" + p.getString("csv") + "'");

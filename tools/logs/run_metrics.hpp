@@ -2,12 +2,14 @@
 // summary and the closed-loop tests all compute them here, live or from a log.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
@@ -17,7 +19,7 @@
 namespace ptz::tools {
 
 struct RunSummary {
-  int64_t frames_published = 0;  // the simulator's (or camera's) count, else frames seen
+  int64_t frames_published = 0;  // the simulator's count, else frames seen (by any message)
   int64_t frames_processed = 0;  // OBJECT_POSE messages
   double latency_ms_p50 = NAN;   // frame capture -> setpoint publish (wall-clock runs only)
   double latency_ms_p99 = NAN;
@@ -29,18 +31,42 @@ struct RunSummary {
   // time, and the phase margin it leaves to the paper's loop model.
   double delay_ms_p99 = NAN;
   double phase_margin_deg = NAN;
-  double centering_rms_px = NAN;  // true target to image centre, both cameras, after settle_s
+  // The tracked true object to the image centre, both cameras, after settle_s; frames where it
+  // is behind either camera are left out (and counted outside the image).
+  double centering_rms_px = NAN;
   double centering_max_px = NAN;
-  int64_t frames_target_outside_image = 0;  // after settle_s, either camera
-  double position_error_rms_m = NAN;        // OBJECT_POSE target vs SIM_TRUTH
+  int64_t frames_target_outside_image = 0;  // after settle_s, either camera (or behind it)
+  double position_error_rms_m = NAN;        // OBJECT_POSE target vs the tracked true object
   double position_error_rms_pct_of_range = NAN;
-  double target_lost_s = 0;  // frames without a target times the frame period
+  double position_error_max_pct_of_range = NAN;  // the worst single pose
+  // Frames without a pose or whose pose has no target, times the frame period (NaN when some
+  // are lost but the period is unknown).
+  double target_lost_s = 0;
   int64_t poses_without_target = 0;
+  int64_t frames_without_pose = 0;  // frames of the run ptz-detect never answered
+  double time_to_acquire_s = NAN;   // first frame -> first pose with a target (NaN: never)
+  // Frames ptz-control spent searching, and coasting, times the frame period (CONTROL_STATE;
+  // NaN when there is none).
+  double search_time_s = NAN;
+  double coast_time_s = NAN;
+  // Frames with a target whose tracked true object is not that of the previous such frame.
+  int64_t target_switches = 0;
   int64_t frames_skipped_late = 0;  // by the simulator, running late (realtime)
   int64_t centering_samples = 0;
   int64_t position_samples = 0;
 
   std::string toJson() const;
+};
+
+// One frame of the run as scored.
+struct FrameScore {
+  int64_t utime = 0;  // capture time
+  bool pose = false;  // OBJECT_POSE answered it
+  bool target = false;
+  // The true object the pose's target was matched to ("" when none), and where it was.
+  std::string tracked;
+  std::array<double, 3> tracked_truth_m{NAN, NAN, NAN};
+  int control_state = -1;  // CONTROL_STATE's state (-1: none)
 };
 
 class RunMetrics {
@@ -51,29 +77,51 @@ class RunMetrics {
   void onTruth(const ptzstereo::sim_truth_t& m);
   void onPose(const ptzstereo::object_pose_t& m);
   void onSetpoint(const ptzstereo::ptz_setpoint_t& m);
+  void onControlState(const ptzstereo::control_state_t& m);
   void onStatus(const ptzstereo::process_status_t& m);
 
+  // Everything received so far, scored in frame order: a pose that came before its truth is
+  // scored once the truth is there, and the numbers do not depend on the arrival order.
   RunSummary summary() const;
-  // Pixel offsets (left x, left y, right x, right y) of the true target from the image centres,
-  // by frame sequence number, after settle_s.
-  const std::map<int64_t, std::vector<double>>& centeringByFrame() const { return centering_; }
+  // Pixel offsets (left x, left y, right x, right y) of the tracked true object from the image
+  // centres, by frame sequence number, after settle_s, where it is in front of both cameras.
+  std::map<int64_t, std::vector<double>> centeringByFrame() const;
+  // Every frame seen (by any message), by sequence number.
+  std::map<int64_t, FrameScore> frames() const;
 
  private:
+  struct TruthObject {
+    int name = -1, class_name = -1;  // into names_
+    std::array<double, 3> position_m{};
+    bool in_front = false;  // of both cameras
+    bool inside = false;    // of both images
+    std::array<double, 4> offset_px{};
+  };
+  struct Pose {
+    int64_t utime = 0;
+    bool target = false;
+    bool finite = false;  // the target's estimate is a number
+    int class_name = -1;
+    std::array<double, 3> estimate_m{};
+  };
+  struct Scored;
+  Scored score() const;
+  int intern(const std::string& s);
+  void noteFrame(int64_t seq, int64_t utime);
+
   std::string target_class_;
   double settle_s_;
-  int64_t first_utime_ = -1;
-  int64_t frames_seen_ = 0;
-  int64_t frame_period_us_ = 0;
-  int64_t last_frame_utime_ = -1;
-  int64_t last_truth_utime_ = -1;
-  std::map<int64_t, std::vector<double>> truth_position_;  // seq -> x, y, z
-  std::map<int64_t, std::vector<double>> centering_;
-  std::vector<double> position_error_m_, position_error_pct_;
-  std::vector<double> latency_ms_, chain_latency_ms_;
-  std::map<int64_t, int64_t> frame_publish_utime_;  // seq -> publish_utime
-  int64_t poses_ = 0, poses_without_target_ = 0;
+  std::vector<std::string> names_;  // object names and classes, interned
+  std::map<std::string, int> name_index_;
+  int64_t frames_seen_ = 0, poses_ = 0, poses_without_target_ = 0, control_states_ = 0;
+  std::map<int64_t, int64_t> frame_utime_;          // seq -> capture time, from any message
+  std::map<int64_t, int64_t> frame_publish_utime_;  // seq -> STEREO_FRAME publish_utime
+  std::map<int64_t, std::vector<TruthObject>> truth_;
+  std::map<int64_t, Pose> pose_;
+  std::map<int64_t, int> control_state_;
+  std::vector<std::pair<int64_t, int64_t>> setpoint_publish_;  // seq, publish_utime
+  std::vector<double> latency_ms_;
   std::map<std::string, int64_t> counters_;  // "process.counter" of the last status
-  int64_t outside_ = 0;
 };
 
 }  // namespace ptz::tools

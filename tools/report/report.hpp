@@ -41,6 +41,20 @@ struct ReportData {
     bool has_truth;
   };
   std::vector<Position> positions;
+  // The track the system follows (OBJECT_TRACKS target_id, -1: none) and how many are live.
+  struct TargetTrack {
+    double t_s;
+    int64_t target_id;
+    int32_t tracks;
+  };
+  std::vector<TargetTrack> target_tracks;
+  // ptz-control's state (CONTROL_STATE, control_state_t::STATE_*) per setpoint.
+  struct Control {
+    double t_s;
+    int state;
+    int64_t target_id;
+  };
+  std::vector<Control> control;
   std::vector<double> delay_ms;
   std::string delay_what;  // what delay_ms measures
   double frame_rate_hz = 0;

@@ -5,6 +5,7 @@
 #include "common/transport.hpp"
 #include "control/stability/stability.hpp"
 #include "ptzstereo/object_detections_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "tools/report/report.hpp"
 
@@ -26,8 +27,9 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
   std::map<int64_t, int64_t> frame_utime, frame_publish;  // by seq
   std::map<int64_t, std::pair<int, int>> image_size;      // by seq
   std::map<int64_t, ptzstereo::object_detections_t> detections;
-  std::map<int64_t, std::array<double, 3>> truth_by_seq;
   std::vector<ptzstereo::object_pose_t> poses;
+  std::vector<ptzstereo::object_tracks_t> tracks;  // without their tracks: the target and count
+  std::vector<ptzstereo::control_state_t> control;
   std::vector<ptzstereo::ptz_setpoint_t> setpoints;
   std::vector<int64_t> frame_periods_us;
   // Log (receive) times, binned once the run's length is known.
@@ -76,17 +78,23 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
       frame_utime.emplace(t.frame_seq, t.utime);
       summary_metrics.onTruth(t);
       series_metrics.onTruth(t);
-      for (const auto& obj : t.objects) {
-        if (obj.class_name == o.target_class) {
-          truth_by_seq[t.frame_seq] = {obj.position_m[0], obj.position_m[1], obj.position_m[2]};
-          break;
-        }
-      }
     } else if (ch == px + channels::kObjectPose) {
       ptzstereo::object_pose_t p{};
       if (!decodeEvent(*ev, &p, &d.undecodable)) continue;
       summary_metrics.onPose(p);
+      series_metrics.onPose(p);
       poses.push_back(p);
+    } else if (ch == px + channels::kObjectTracks) {
+      ptzstereo::object_tracks_t m{};
+      if (!decodeEvent(*ev, &m, &d.undecodable)) continue;
+      m.tracks.clear();
+      tracks.push_back(std::move(m));
+    } else if (ch == px + channels::kControlState) {
+      ptzstereo::control_state_t m{};
+      if (!decodeEvent(*ev, &m, &d.undecodable)) continue;
+      summary_metrics.onControlState(m);
+      series_metrics.onControlState(m);
+      control.push_back(std::move(m));
     } else if (ch == px + channels::kObjectDetections) {
       ptzstereo::object_detections_t m{};
       if (decodeEvent(*ev, &m, &d.undecodable)) detections[m.frame_seq] = m;
@@ -161,10 +169,19 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
     d.tau_max_ms =
         1000 * control::sampledTauMax({o.loop_gain, o.time_constant_s, 0.0}, d.frame_rate_hz);
   }
-  // Centring: the true target when the simulator's truth is logged, else the detections.
-  if (!series_metrics.centeringByFrame().empty()) {
+  // In double: times from the log, whatever they are, cannot overflow.
+  const auto since_t0_s = [&](int64_t utime) {
+    return (static_cast<double>(utime) - static_cast<double>(t0)) * 1e-6;
+  };
+  for (const auto& m : tracks)
+    d.target_tracks.push_back({since_t0_s(m.utime), m.target_id, m.num_tracks});
+  for (const auto& m : control) d.control.push_back({since_t0_s(m.utime), m.state, m.target_id});
+  // Centring: the tracked true object when the simulator's truth is logged, else the detections.
+  const std::map<int64_t, FrameScore> scored = series_metrics.frames();
+  const std::map<int64_t, std::vector<double>> centring = series_metrics.centeringByFrame();
+  if (!centring.empty()) {
     d.centring_source = "SIM_TRUTH";
-    for (const auto& [seq, off] : series_metrics.centeringByFrame()) {
+    for (const auto& [seq, off] : centring) {
       if (off.size() == 4 && frame_utime.count(seq)) {
         d.centring.push_back({(frame_utime[seq] - t0) * 1e-6, {off[0], off[1], off[2], off[3]}});
       }
@@ -176,8 +193,9 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
     const double t_s = (p.utime - t0) * 1e-6;
     ReportData::Position row{
         t_s, {obj.position_m[0], obj.position_m[1], obj.position_m[2]}, {}, false};
-    if (auto it = truth_by_seq.find(p.frame_seq); it != truth_by_seq.end()) {
-      row.truth_m = it->second;
+    // The truth of the object this target was scored against (RunMetrics: by identity).
+    if (auto it = scored.find(p.frame_seq); it != scored.end() && !it->second.tracked.empty()) {
+      row.truth_m = it->second.tracked_truth_m;
       row.has_truth = true;
     }
     d.positions.push_back(row);

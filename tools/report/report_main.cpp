@@ -14,7 +14,8 @@ int main(int argc, char** argv) {
   ptz::Params p("ptz-report",
                 "Makes a report of a recorded run (LCM log): plots of pan/tilt/zoom setpoints and "
                 "states, centring error, 3D position against ground truth, loop delay against "
-                "tau_max, message rates and drops; their CSVs; summary.json; report.md.\n" +
+                "tau_max, message rates and drops, the target track and controller state over "
+                "time; their CSVs; summary.json; report.md.\n" +
                     ptz::tools::logExitCodesHelp(""));
   p.add("log", "", "the LCM log (also accepted as the only positional argument)");
   p.add("out", "", "report folder; empty: LOG's name with .report");

@@ -91,6 +91,27 @@ std::string gnuplotScript(const ReportData& d) {
     }
     g << "unset multiplot\n";
   }
+  if (!d.target_tracks.empty() || !d.control.empty()) {
+    const int panels = (d.target_tracks.empty() ? 0 : 1) + (d.control.empty() ? 0 : 1);
+    g << "set output " << q << "tracks.png'\n"
+      << "set multiplot layout " << panels << ",1 title 'The target track and the controller "
+      << "state'\nset xlabel 'time (s)'\nset lmargin at screen 0.11\n";
+    if (!d.target_tracks.empty()) {
+      g << "set ylabel 'track id (-1: none)'\nplot " << q
+        << "target.csv' using 1:2 skip 1 with steps lw 2 lc rgb '#d62728' title 'target "
+        << "(OBJECT_TRACKS)', " << q
+        << "target.csv' using 1:3 skip 1 with steps dt 2 lc rgb '#7f7f7f' title 'live tracks'\n";
+    }
+    if (!d.control.empty()) {
+      g << "set ylabel 'ptz-control state'\nset yrange [-0.5:4.5]\n"
+        << "set ytics ('tracking' 0, 'coasting' 1, 'searching' 2, 'holding' 3, 'homing' 4)\n"
+        << "plot " << q
+        << "control_state.csv' using 1:2 skip 1 with steps lw 2 lc rgb '#1f77b4' title "
+        << "'CONTROL_STATE'\n"
+        << "set ytics autofreq\nset autoscale y\n";
+    }
+    g << "unset multiplot\nset lmargin at screen 0.08\n";
+  }
   if (!d.delay_ms.empty()) {
     g << "set output " << q << "delay.png'\nset style fill solid 0.5\n"
       << "set multiplot layout 2,1 title 'Loop delay: " << d.delay_what << "'\n"
@@ -149,6 +170,7 @@ std::string reportMarkdown(const ReportData& d, const std::string& log_path,
       {"ptz.png", "Pan, tilt and zoom of both cameras: state and setpoint"},
       {"centring.png", "Centring error (" + d.centring_source + ")"},
       {"position.png", "3D position of the target"},
+      {"tracks.png", "Target track and controller state over time"},
       {"delay.png", "Loop delay (" + d.delay_what + ")"},
       {"rates.png", "Message rates and drops per channel"}};
   for (const auto& png : pngs) {
@@ -195,6 +217,20 @@ std::vector<std::string> writeReport(const ReportData& d, const std::string& log
     files.push_back("position.csv");
     pngs.push_back("position.png");
   }
+  if (!d.target_tracks.empty()) {
+    auto f = open(dir + "/target.csv");
+    f << "t_s,target_id,tracks\n";
+    for (const auto& t : d.target_tracks)
+      f << t.t_s << "," << t.target_id << "," << t.tracks << "\n";
+    files.push_back("target.csv");
+  }
+  if (!d.control.empty()) {
+    auto f = open(dir + "/control_state.csv");
+    f << "t_s,state,target_id\n";
+    for (const auto& c : d.control) f << c.t_s << "," << c.state << "," << c.target_id << "\n";
+    files.push_back("control_state.csv");
+  }
+  if (!d.target_tracks.empty() || !d.control.empty()) pngs.push_back("tracks.png");
   if (!d.delay_ms.empty()) {
     auto f = open(dir + "/delay.csv");
     f << "delay_ms\n";

@@ -1,12 +1,15 @@
 // ptz-view: a live viewer (OpenCV highgui; under X or Xvfb). It only subscribes: frames come
 // with a queue of one and a frame it is too busy to draw is counted and skipped, so it never
-// slows the loop. A frame is drawn once its detections and pose are in (or after max_wait_s).
-// Keys: p pause/resume, n one frame while paused, s screenshot, q or Esc quit.
+// slows the loop. A frame is drawn once its detections, pose and tracks are in (or after
+// max_wait_s). Keys: p pause/resume, n one frame while paused, s screenshot, q or Esc quit. A left
+// click on either image asks ptz-detect to follow the object under it (TARGET_SELECT).
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <deque>
+#include <iterator>
 #include <map>
 #include <memory>
 
@@ -29,7 +32,8 @@ class ViewNode {
         max_wait_us_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)),
         screenshot_dir_(p.getString("screenshot_dir")),
         screenshot_after_(p.getInt("screenshot_after_frames")),
-        ch_frame_(channel(p, channels::kStereoFrame)) {
+        ch_frame_(channel(p, channels::kStereoFrame)),
+        ch_select_(channel(p, channels::kTargetSelect)) {
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
         [this](const std::string& ch, const ptzstereo::stereo_frame_t& m) { onFrame(ch, m); },
@@ -38,12 +42,24 @@ class ViewNode {
         *lcm_, channel(p, channels::kObjectDetections), status_,
         [this](const std::string&, const ptzstereo::object_detections_t& m) {
           detections_by_seq_[m.frame_seq] = m;
+          keepRecent(&detections_by_seq_);
         });
     poses_ = std::make_unique<SafeSubscription<ptzstereo::object_pose_t>>(
         *lcm_, channel(p, channels::kObjectPose), status_,
         [this](const std::string&, const ptzstereo::object_pose_t& m) {
           poses_by_seq_[m.frame_seq] = m;
+          keepRecent(&poses_by_seq_);
         });
+    tracks_ = std::make_unique<SafeSubscription<ptzstereo::object_tracks_t>>(
+        *lcm_, channel(p, channels::kObjectTracks), status_,
+        [this](const std::string&, const ptzstereo::object_tracks_t& m) {
+          tracks_by_seq_[m.frame_seq] = m;
+          keepRecent(&tracks_by_seq_);
+          tracks_seen_ = true;
+        });
+    control_states_ = std::make_unique<SafeSubscription<ptzstereo::control_state_t>>(
+        *lcm_, channel(p, channels::kControlState), status_,
+        [this](const std::string&, const ptzstereo::control_state_t& m) { control_state_ = m; });
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, channel(p, channels::kPtzSetpoint), status_,
         [this](const std::string&, const ptzstereo::ptz_setpoint_t& m) { setpoint_ = m; });
@@ -57,6 +73,7 @@ class ViewNode {
         });
     cv::namedWindow(kWindow, cv::WINDOW_AUTOSIZE | cv::WINDOW_GUI_NORMAL);
     cv::moveWindow(kWindow, 0, 0);
+    cv::setMouseCallback(kWindow, &ViewNode::onMouse, this);
   }
 
   int run() {
@@ -77,6 +94,50 @@ class ViewNode {
   }
 
  private:
+  // Messages for frames not drawn yet, by frame_seq: at most kKept, those farthest from the
+  // newest frame dropped first (bogus frame_seqs can neither grow them nor crowd out the rest).
+  static constexpr size_t kKept = 64;
+  template <class Map>
+  void keepRecent(Map* by_seq) const {
+    const auto far = [&](int64_t seq) {
+      return std::abs(static_cast<double>(seq) - static_cast<double>(newest_frame_seq_));
+    };
+    while (by_seq->size() > kKept) {
+      if (far(by_seq->begin()->first) >= far(by_seq->rbegin()->first)) {
+        by_seq->erase(by_seq->begin());
+      } else {
+        by_seq->erase(std::prev(by_seq->end()));
+      }
+    }
+  }
+  template <class Map>
+  static void forgetUpTo(Map* by_seq, int64_t seq) {
+    by_seq->erase(by_seq->begin(), by_seq->upper_bound(seq));
+  }
+  void forgetUpTo(int64_t seq) {
+    forgetUpTo(&detections_by_seq_, seq);
+    forgetUpTo(&poses_by_seq_, seq);
+    forgetUpTo(&tracks_by_seq_, seq);
+  }
+
+  // A left click on the shown frame: TARGET_SELECT for the pixel under it (highgui calls this
+  // from waitKey, on the loop's thread).
+  static void onMouse(int event, int x, int y, int, void* self) {
+    if (event == cv::EVENT_LBUTTONDOWN) static_cast<ViewNode*>(self)->click(x, y);
+  }
+  void click(int x, int y) {
+    if (canvas_.empty()) return;
+    const auto m = clickToSelect(x, y, canvas_.cols / 2, canvas_.rows - kPanelHeightPx, canvas_seq_,
+                                 wallUtime());
+    if (!m) return;
+    if (!status_.publish(ch_select_, *m)) return;
+    status_.increment("target_selects");
+    std::printf("ptz-view: TARGET_SELECT %s image (%.0f, %.0f) of frame %lld\n",
+                m->camera == ptzstereo::target_select_t::CAMERA_LEFT ? "left" : "right", m->x_px,
+                m->y_px, static_cast<long long>(m->frame_seq));
+    std::fflush(stdout);
+  }
+
   struct Pending {
     ptzstereo::stereo_frame_t frame;
     int64_t received_us;
@@ -84,14 +145,14 @@ class ViewNode {
 
   void onFrame(const std::string& ch, const ptzstereo::stereo_frame_t& m) {
     status_.countIn(ch, -1);
+    newest_frame_seq_ = m.seq;
     const int64_t now = wallUtime();
     frame_times_us_.push_back(now);
     while (frame_times_us_.front() < now - 1'000'000) frame_times_us_.pop_front();
     if (paused_ && !step_) {
       status_.increment("frames_not_drawn");
-      // Their detections and poses will never be drawn either.
-      detections_by_seq_.erase(detections_by_seq_.begin(), detections_by_seq_.upper_bound(m.seq));
-      poses_by_seq_.erase(poses_by_seq_.begin(), poses_by_seq_.upper_bound(m.seq));
+      // Their detections, poses and tracks will never be drawn either.
+      forgetUpTo(m.seq);
       return;
     }
     // Kept as it came: only the frame that is drawn is decoded (a newer one replaces it).
@@ -103,7 +164,9 @@ class ViewNode {
     if (!pending_) return;
     const ptzstereo::stereo_frame_t& m = pending_->frame;
     const int64_t seq = m.seq;
-    const bool complete = detections_by_seq_.count(seq) && poses_by_seq_.count(seq);
+    // Tracks are waited for once a ptz-detect has sent some (an older log has none).
+    const bool complete = detections_by_seq_.count(seq) && poses_by_seq_.count(seq) &&
+                          (!tracks_seen_ || tracks_by_seq_.count(seq));
     if (!complete && wallUtime() - pending_->received_us < max_wait_us_) return;
     ViewInput in;
     std::string error;
@@ -126,7 +189,9 @@ class ViewNode {
     in.seq = seq;
     if (detections_by_seq_.count(seq)) in.detections = detections_by_seq_[seq];
     if (poses_by_seq_.count(seq)) in.pose = poses_by_seq_[seq];
+    if (tracks_by_seq_.count(seq)) in.tracks = tracks_by_seq_[seq];
     in.setpoint = setpoint_;
+    in.control = control_state_;
     in.delay_ms_p50 = delay_ms_p50_;
     in.delay_ms_p99 = delay_ms_p99_;
     in.frame_rate_hz = static_cast<double>(frame_times_us_.size());
@@ -144,8 +209,7 @@ class ViewNode {
     pending_.reset();
     step_ = false;
     // Only the frames still to come are worth keeping.
-    detections_by_seq_.erase(detections_by_seq_.begin(), detections_by_seq_.upper_bound(seq));
-    poses_by_seq_.erase(poses_by_seq_.begin(), poses_by_seq_.upper_bound(seq));
+    forgetUpTo(seq);
     if (screenshot_after_ > 0 && status_.counter("frames_drawn") == screenshot_after_) {
       screenshot();
     }
@@ -170,11 +234,15 @@ class ViewNode {
   int64_t max_wait_us_;
   std::string screenshot_dir_;
   int64_t screenshot_after_;
-  std::string ch_frame_;
+  std::string ch_frame_, ch_select_;
   std::optional<Pending> pending_;
   std::map<int64_t, ptzstereo::object_detections_t> detections_by_seq_;
   std::map<int64_t, ptzstereo::object_pose_t> poses_by_seq_;
+  std::map<int64_t, ptzstereo::object_tracks_t> tracks_by_seq_;
+  bool tracks_seen_ = false;
+  int64_t newest_frame_seq_ = 0;
   std::optional<ptzstereo::ptz_setpoint_t> setpoint_;
+  std::optional<ptzstereo::control_state_t> control_state_;
   double delay_ms_p50_ = NAN, delay_ms_p99_ = NAN;
   std::deque<int64_t> frame_times_us_, drawn_times_us_;
   cv::Mat canvas_;
@@ -183,6 +251,8 @@ class ViewNode {
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
   std::unique_ptr<SafeSubscription<ptzstereo::object_detections_t>> detections_;
   std::unique_ptr<SafeSubscription<ptzstereo::object_pose_t>> poses_;
+  std::unique_ptr<SafeSubscription<ptzstereo::object_tracks_t>> tracks_;
+  std::unique_ptr<SafeSubscription<ptzstereo::control_state_t>> control_states_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
   std::unique_ptr<SafeSubscription<ptzstereo::process_status_t>> control_;
 };
@@ -193,12 +263,15 @@ class ViewNode {
 int main(int argc, char** argv) {
   using namespace ptz;
   Params params("ptz-view",
-                "Live viewer: both camera images with detections, image centre, the target's "
-                "epipolar line, PTZ state and setpoint, 3D position, loop delay and rates. "
-                "Keys: p pause, n step, s screenshot, q quit. Needs X (or Xvfb).");
+                "Live viewer: both camera images with detections, tracks (ids, the target), image "
+                "centre, the target's epipolar line, PTZ state and setpoint, 3D position, the "
+                "controller's state, loop delay and rates. Keys: p pause, n step, s screenshot, "
+                "q quit; a left click on an image selects the object under it. Needs X (or "
+                "Xvfb).");
   addTransportParams(params);
   params.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
-  params.add("max_wait_s", 0.2, "s", "draw a frame without its detections after this long",
+  params.add("max_wait_s", 0.2, "s",
+             "draw a frame without its detections, pose or tracks after this long",
              Range::atLeast(0));
   params.add("screenshot_dir", ".", "where the s key (and screenshot_after_frames) saves PNGs");
   params.add("screenshot_after_frames", 0, "", "save one screenshot after this many frames",

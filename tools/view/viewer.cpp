@@ -2,6 +2,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -14,6 +15,22 @@ std::string format(const char* fmt, double a, double b = 0, double c = 0, double
   char text[160];
   std::snprintf(text, sizeof(text), fmt, a, b, c, d);
   return text;
+}
+
+// s cut to fit max_width_px ("..." marks the cut) and made printable: the strings come from
+// outside and may be of any length.
+std::string fitText(const std::string& s, int max_width_px, double scale) {
+  std::string t = s.substr(0, 240);
+  for (char& ch : t) {
+    if (ch < 32 || ch > 126) ch = '?';
+  }
+  int baseline = 0;
+  auto width = [&](const std::string& x) {
+    return cv::getTextSize(x, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline).width;
+  };
+  if (width(t) <= max_width_px) return t;
+  while (!t.empty() && width(t + "...") > max_width_px) t.pop_back();
+  return t + "...";
 }
 
 void drawCross(cv::Mat* image) {
@@ -55,7 +72,145 @@ void drawEpipolar(cv::Mat* image, const CameraView& from, const CameraView& to,
   if (line.size() >= 2) cv::polylines(*image, line, false, kEpipolarColour, 1, cv::LINE_AA);
 }
 
+void drawDashedCircle(cv::Mat* image, cv::Point c, int r, const cv::Scalar& colour) {
+  for (int a = 0; a < 360; a += 30) {
+    cv::ellipse(*image, c, cv::Size(r, r), 0, a, a + 15, colour, 1, cv::LINE_AA);
+  }
+}
+
+const char* trackStateName(int8_t state) {
+  switch (state) {
+    case ptzstereo::object_track_t::STATE_TENTATIVE:
+      return " tentative";
+    case ptzstereo::object_track_t::STATE_CONFIRMED:
+      return "";
+    case ptzstereo::object_track_t::STATE_COASTING:
+      return " coasting";
+    default:
+      return " state?";
+  }
+}
+
+// One track through one camera: a circle of its apparent radius (fx r / range, as ptz-detect
+// measures it), an x at its centre, "#id class" below. Not drawn where the camera cannot see it.
+void drawTrack(cv::Mat* image, const CameraView& view, const ptzstereo::object_track_t& t,
+               bool is_target) {
+  const Eigen::Vector3d p(t.position_m[0], t.position_m[1], t.position_m[2]);
+  if (!p.allFinite()) return;
+  const Eigen::Vector2d px = view.project(p);
+  if (!px.allFinite() || std::abs(px.x()) > 1e5 || std::abs(px.y()) > 1e5) return;
+  const double range_m = (p - view.position_head_m).norm();
+  double radius_px = 0;
+  if (std::isfinite(t.radius_m) && t.radius_m > 0 && range_m > 0) {
+    radius_px =
+        std::min(view.intrinsics.fx * t.radius_m / range_m, 2.0 * (image->cols + image->rows));
+  }
+  const bool tentative = t.state == ptzstereo::object_track_t::STATE_TENTATIVE;
+  const bool coasting = t.state == ptzstereo::object_track_t::STATE_COASTING;
+  const cv::Scalar colour = is_target ? kTargetColour : coasting ? kCoastingColour : kTrackColour;
+  const cv::Point c(static_cast<int>(std::lround(px.x())), static_cast<int>(std::lround(px.y())));
+  const int r = static_cast<int>(std::lround(radius_px));
+  if (r > 0) {
+    if (tentative && !is_target) {
+      drawDashedCircle(image, c, r, colour);
+    } else {
+      cv::circle(*image, c, r, colour, is_target ? 3 : 2, cv::LINE_AA);
+    }
+  }
+  // Not anti-aliased: the centre pixel is exactly the colour.
+  cv::drawMarker(*image, c, colour, cv::MARKER_TILTED_CROSS, 10, 1, cv::LINE_8);
+  if (c.x < 0 || c.y < 0 || c.x >= image->cols || c.y >= image->rows) return;
+  const std::string label = fitText("#" + std::to_string(t.id) + " " + t.class_name.substr(0, 40) +
+                                        (is_target ? " TARGET" : "") + trackStateName(t.state),
+                                    image->cols - 4, 0.45);
+  int baseline = 0;
+  const int text_w = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline).width;
+  const cv::Point at(std::clamp(c.x - r, 2, std::max(2, image->cols - text_w - 2)),
+                     std::clamp(c.y + r + 16, 14, image->rows - 4));
+  // A dark rim keeps the label readable on any image.
+  cv::putText(*image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 3,
+              cv::LINE_AA);
+  cv::putText(*image, label, at, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv::LINE_AA);
+}
+
+// The frame's tracks (the first kMaxTracksDrawn), the target last so it is on top.
+void drawTracks(cv::Mat* image, const CameraView& view, const ptzstereo::object_tracks_t& m) {
+  const size_t n = std::min(m.tracks.size(), static_cast<size_t>(kMaxTracksDrawn));
+  const ptzstereo::object_track_t* target = nullptr;
+  for (size_t i = 0; i < n; ++i) {
+    const auto& t = m.tracks[i];
+    if (t.id == m.target_id && m.target_id >= 0) {
+      target = &t;
+    } else {
+      drawTrack(image, view, t, false);
+    }
+  }
+  if (target) drawTrack(image, view, *target, true);
+}
+
+std::string controlLine(const ViewInput& in) {
+  if (!in.control) return "control: no state yet";
+  const auto& s = *in.control;
+  std::string line = "control " + controlStateText(s) + "   ";
+  line += s.target_id >= 0 ? "target #" + std::to_string(s.target_id) : std::string("no target");
+  return line + ": " + s.reason;
+}
+
+std::string tracksLine(const ViewInput& in) {
+  if (!in.tracks) return "tracks: none for this frame";
+  const auto& m = *in.tracks;
+  std::string line =
+      "detect " + std::to_string(m.tracks.size()) + (m.tracks.size() == 1 ? " track" : " tracks");
+  if (m.tracks.size() > static_cast<size_t>(kMaxTracksDrawn)) {
+    line += " (" + std::to_string(kMaxTracksDrawn) + " drawn)";
+  }
+  line += m.target_id >= 0 ? "   target #" + std::to_string(m.target_id) : "   no target";
+  return line + ": " + m.target_reason;
+}
+
 }  // namespace
+
+std::string controlStateText(const ptzstereo::control_state_t& s) {
+  char text[96];
+  switch (s.state) {
+    case ptzstereo::control_state_t::STATE_TRACKING:
+      return "TRACKING";
+    case ptzstereo::control_state_t::STATE_COASTING:
+      std::snprintf(text, sizeof(text), "COASTING %.1f s", s.since_target_s);
+      return text;
+    case ptzstereo::control_state_t::STATE_SEARCHING:
+      std::snprintf(text, sizeof(text), "SEARCHING %d/%d", s.search_waypoint + 1,
+                    s.search_waypoints);
+      return text;
+    case ptzstereo::control_state_t::STATE_HOLDING:
+      std::snprintf(text, sizeof(text), "HOLDING %.1f s", s.since_target_s);
+      return text;
+    case ptzstereo::control_state_t::STATE_HOMING:
+      return "HOMING";
+    default:
+      return "STATE " + std::to_string(s.state) + "?";
+  }
+}
+
+std::optional<ptzstereo::target_select_t> clickToSelect(int x, int y, int image_width,
+                                                        int image_height, int64_t frame_seq,
+                                                        int64_t now_utime) {
+  if (image_width <= 0 || x < 0 || y < 0 || y >= image_height || x >= 2 * image_width) {
+    return std::nullopt;
+  }
+  const bool right = x >= image_width;
+  ptzstereo::target_select_t m{};
+  m.utime = now_utime;
+  m.publish_utime = now_utime;
+  m.mode = ptzstereo::target_select_t::MODE_IMAGE_POINT;
+  m.track_id = -1;
+  m.camera =
+      right ? ptzstereo::target_select_t::CAMERA_RIGHT : ptzstereo::target_select_t::CAMERA_LEFT;
+  m.x_px = right ? x - image_width : x;
+  m.y_px = y;
+  m.frame_seq = frame_seq;
+  return m;
+}
 
 cv::Mat drawView(const StereoRig& rig, const ViewInput& in) {
   const int w = in.left.cols, h = in.left.rows;
@@ -73,11 +228,11 @@ cv::Mat drawView(const StereoRig& rig, const ViewInput& in) {
     target_left = target->left_index;
     target_right = target->right_index;
   }
+  const CameraView lv = rig.view(Side::kLeft, in.left_ptz),
+                   rv = rig.view(Side::kRight, in.right_ptz);
   if (in.detections) {
     drawDetections(&left, in.detections->left, target_left);
     drawDetections(&right, in.detections->right, target_right);
-    const CameraView lv = rig.view(Side::kLeft, in.left_ptz),
-                     rv = rig.view(Side::kRight, in.right_ptz);
     if (target_left >= 0 && target_left < in.detections->num_left) {
       const auto& d = in.detections->left[static_cast<size_t>(target_left)];
       drawEpipolar(&right, lv, rv, {d.centroid_x_px, d.centroid_y_px});
@@ -87,7 +242,11 @@ cv::Mat drawView(const StereoRig& rig, const ViewInput& in) {
       drawEpipolar(&left, rv, lv, {d.centroid_x_px, d.centroid_y_px});
     }
   }
-  // The text panel: one column per camera, then the target and the loop.
+  if (in.tracks) {
+    drawTracks(&left, lv, *in.tracks);
+    drawTracks(&right, rv, *in.tracks);
+  }
+  // The text panel: one column per camera, then the target and the loop, then the states.
   const cv::Scalar text(230, 230, 230);
   auto put = [&](const std::string& s, int x, int row) {
     cv::putText(canvas, s, cv::Point(x, h + 22 + 24 * row), cv::FONT_HERSHEY_SIMPLEX, 0.5, text, 1,
@@ -124,6 +283,9 @@ cv::Mat drawView(const StereoRig& rig, const ViewInput& in) {
              static_cast<double>(in.frames_dropped)),
       10, 3);
   if (in.paused) put("PAUSED  (p: resume, n: step, s: screenshot, q: quit)", 10 + w, 3);
+  // The states across the whole width: their reasons are sentences.
+  put(fitText(controlLine(in), 2 * w - 20, 0.5), 10, 4);
+  put(fitText(tracksLine(in), 2 * w - 20, 0.5), 10, 5);
   return canvas;
 }
 

@@ -117,6 +117,7 @@ TEST(Controller, TrackModeLeadsAMovingTargetByItsRateTimesTheLead) {
 TEST(Controller, LostTargetHoldsThenReturnsHomeAndResumesWithoutAJump) {
   const StereoRig rig = StereoRig::makeDefault();
   control::ControllerParams params;  // default slew limit 3 rad/s
+  params.lost_mode = "home";
   control::Controller c(rig, params);
   const Eigen::Vector3d p(1.5, -0.4, 3.0);
   std::array<PtzPose, 2> sp{};
@@ -149,11 +150,19 @@ TEST(Controller, ImplausibleTargetsAreIgnoredAndLimitsHold) {
   auto params = fast();
   control::Controller c(rig, params);
   const double nan = std::nan("");
-  EXPECT_FALSE(c.plausible({Eigen::Vector3d(nan, 0, 3), 0.1}));
-  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 1e6), 0.1}));
-  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, -2), 0.1}));
-  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 3), std::numeric_limits<double>::infinity()}));
-  EXPECT_TRUE(c.plausible({Eigen::Vector3d(0, 0, 3), 0.1}));
+  const PtzPose home{0, 0, 1};
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(nan, 0, 3), 0.1}, home, home));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 1e6), 0.1}, home, home));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, -2), 0.1}, home, home));
+  EXPECT_FALSE(
+      c.plausible({Eigen::Vector3d(0, 0, 3), std::numeric_limits<double>::infinity()}, home, home));
+  EXPECT_TRUE(c.plausible({Eigen::Vector3d(0, 0, 3), 0.1}, home, home));
+  // Behind the head frame but in front of both cameras turned round: plausible.
+  const PtzPose behind{M_PI * 160 / 180, 0, 1};
+  EXPECT_TRUE(c.plausible({Eigen::Vector3d(1, 0, -3), 0.1}, behind, behind));
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 3), 0.1}, behind, behind));
+  // In front of one camera only (the other turned away): implausible.
+  EXPECT_FALSE(c.plausible({Eigen::Vector3d(0, 0, 3), 0.1}, home, behind));
   // A target far up: tilt stops at its +90 deg limit... and far right beyond pan's 170 deg.
   std::array<PtzPose, 2> sp{};
   for (int k = 0; k < 10; ++k) {

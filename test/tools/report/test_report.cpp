@@ -1,6 +1,6 @@
 // ptz-report on the committed 2 s run: every plot, and a summary whose numbers match what this
 // test computes from the log on its own (OpenCV's projectPoints for the centring); broken,
-// empty and unrelated logs.
+// empty and unrelated logs; a made-up run's track ids and controller states over time.
 #include <gtest/gtest.h>
 
 #include <opencv2/calib3d.hpp>
@@ -16,6 +16,7 @@
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
+#include "tools/logs/synthetic_run.hpp"
 #include "tools/report/report.hpp"
 
 namespace {
@@ -142,7 +143,11 @@ TEST(Report, ATruncatedLogIsReportedAsFarAsItGoesAndSaysWhere) {
 
 TEST(Report, GarbageInTheMiddleIsSkippedAndLocated) {
   std::string bytes = readAll(kFixture);
-  const size_t at = bytes.size() / 2;
+  // From the first event header after the middle (LCM's sync word), so the garbage breaks an
+  // event whatever the sizes of the events around the middle.
+  const size_t at = bytes.find(std::string("\xED\xA1\xDA\x01", 4), bytes.size() / 2);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_LT(at + 5000, bytes.size());
   for (size_t i = at; i < at + 5000; ++i) bytes[i] = static_cast<char>(i * 7919 % 251);
   const std::string path = tempPath("corrupt.lcmlog");
   std::ofstream(path, std::ios::binary)
@@ -185,4 +190,48 @@ TEST(Report, AnEmptyLogOrOneWithoutTheNeededChannelsIsRefused) {
   EXPECT_EQ(output, "ptz-report: log '/nonexistent/run.lcmlog': No such file or directory\n");
   EXPECT_EQ(runReport(kFixture + " --settle-s -5", &output), 2);
   EXPECT_EQ(output, "ptz-report: flag --settle-s: parameter 'settle_s' must be >= 0, got '-5'\n");
+}
+
+TEST(Report, TrackIdsAndControllerStateOverTimeAndTheRunsNumbersOfAKnownRun) {
+  namespace syn = ptz::test::synthetic;
+  using K = syn::KnownRun;
+  const std::string log = tempPath("known.lcmlog"), dir = tempPath("known.report");
+  syn::writeKnownRun(log);
+  ptz::tools::LogReader reader(log);
+  ptz::tools::ReportOptions options;
+  options.settle_s = 0;
+  const ptz::tools::ReportData d = ptz::tools::collectReport(reader, options);
+  ASSERT_EQ(d.target_tracks.size(), 18u);  // frames 2-19
+  EXPECT_NEAR(d.target_tracks[0].t_s, 0.2, 1e-9);
+  EXPECT_EQ(d.target_tracks[0].target_id, -1);
+  EXPECT_EQ(d.target_tracks[5].target_id, 1);   // frame 7
+  EXPECT_EQ(d.target_tracks[14].target_id, 2);  // frame 16
+  EXPECT_EQ(d.target_tracks[14].tracks, 2);
+  ASSERT_EQ(d.control.size(), 18u);
+  EXPECT_EQ(d.control[0].state, ptzstereo::control_state_t::STATE_SEARCHING);
+  EXPECT_EQ(d.control[10].state, ptzstereo::control_state_t::STATE_COASTING);  // frame 12
+  // The 3D truth of each position is the object tracked: ball_b once it is the target.
+  ASSERT_EQ(d.positions.size(), static_cast<size_t>(K::kOnA + K::kOnB));
+  EXPECT_EQ(d.positions.back().truth_m[0], 0.5);
+  EXPECT_EQ(d.positions.front().truth_m[0], 0.0);
+  EXPECT_EQ(d.summary.target_switches, K::kSwitches);
+  EXPECT_NEAR(d.summary.search_time_s, K::kSearchS, 1e-9);
+  EXPECT_NEAR(d.summary.coast_time_s, K::kCoastS, 1e-9);
+  EXPECT_NEAR(d.summary.time_to_acquire_s, K::kAcquireS, 1e-9);
+  EXPECT_NEAR(d.summary.target_lost_s, K::kLostS, 1e-9);
+  EXPECT_EQ(d.summary.frames_without_pose, K::kWithoutPose);
+
+  std::string output;
+  ASSERT_EQ(runReport(log + " --out " + dir + " --settle-s 0", &output), 0) << output;
+  const cv::Mat image = cv::imread(dir + "/tracks.png");
+  EXPECT_EQ(image.cols, 1000);
+  EXPECT_EQ(image.rows, 750);
+  EXPECT_NE(readAll(dir + "/report.md").find("](tracks.png)"), std::string::npos);
+  const std::string control = readAll(dir + "/control_state.csv");
+  EXPECT_EQ(control.rfind("t_s,state,target_id\n0.2,2,-1\n", 0), 0u) << control;
+  const std::string target = readAll(dir + "/target.csv");
+  EXPECT_NE(target.find("\n1.6,2,2\n"), std::string::npos) << target;
+  const std::string summary = readAll(dir + "/summary.json");
+  EXPECT_EQ(jsonNumber(summary, "target_switches"), K::kSwitches);
+  EXPECT_NEAR(jsonNumber(summary, "search_time_s"), K::kSearchS, 1e-9);
 }

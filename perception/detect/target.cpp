@@ -1,0 +1,130 @@
+#include "perception/detect/target.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace ptz::perception {
+namespace {
+
+bool lockable(const Track& t) {
+  return t.state != TrackState::kTentative;
+}
+
+std::string describe(const Track& t) {
+  return "track " + std::to_string(t.id) + " (" + t.class_name + ")";
+}
+
+}  // namespace
+
+TargetSelector::TargetSelector(std::string default_class, std::vector<std::string> known_classes,
+                               double pick_radius_px)
+    : default_class_(std::move(default_class)),
+      known_classes_(std::move(known_classes)),
+      pick_radius_px_(pick_radius_px),
+      class_(default_class_) {}
+
+void TargetSelector::lock(const Track& t, const std::string& why) {
+  locked_id_ = t.id;
+  class_ = t.class_name;
+  reason_ = "locked on " + describe(t) + " " + why;
+  lost_.reset();
+}
+
+int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
+  if (locked_id_ >= 0) {
+    for (const auto& t : tracks) {
+      if (t.id == locked_id_) {
+        lost_ = t;  // the newest state, for the case it goes
+        return locked_id_;
+      }
+    }
+    reason_ = "lost track " + std::to_string(locked_id_) + " (" + class_ + ")";
+    locked_id_ = -1;
+  }
+  const Track* best = nullptr;
+  double best_cost = std::numeric_limits<double>::infinity();
+  for (const auto& t : tracks) {
+    if (!lockable(t) || t.class_name != class_) continue;
+    double cost;
+    if (lost_) {
+      // Where the lost target was heading (constant velocity, at most 1 s on: the acceleration
+      // of an old state is no guide).
+      const double dt = std::clamp(t_s - lost_->t_s, 0.0, 1.0);
+      cost = (t.position() - (lost_->position() + dt * lost_->velocity())).norm();
+    } else {
+      // The angle from the optical axis at home (+z): what the cameras already look at.
+      const Eigen::Vector3d p = t.position();
+      cost = std::atan2(std::hypot(p.x(), p.y()), p.z());
+    }
+    if (cost < best_cost) {
+      best_cost = cost;
+      best = &t;
+    }
+  }
+  if (best) {
+    const bool again = lost_.has_value();
+    const int64_t lost_id = again ? lost_->id : -1;
+    lock(*best, again ? "by prediction after losing track " + std::to_string(lost_id)
+                      : "by class (nearest the optical axis)");
+  }
+  return locked_id_;
+}
+
+bool TargetSelector::request(const TargetRequest& r, const std::vector<Track>& tracks,
+                             const CameraView& left, const CameraView& right, std::string* why) {
+  auto refuse = [&](const std::string& text) {
+    if (why) *why = text;
+    return false;
+  };
+  switch (r.mode) {
+    case TargetRequest::Mode::kClass: {
+      const std::string name = r.class_name.empty() ? default_class_ : r.class_name;
+      if (std::find(known_classes_.begin(), known_classes_.end(), name) == known_classes_.end()) {
+        return refuse("unknown class '" + name + "'");
+      }
+      if (name == class_ && locked_id_ >= 0) return true;  // already on one of that class
+      class_ = name;
+      locked_id_ = -1;
+      lost_.reset();
+      reason_ = "class " + name + " requested: waiting for a confirmed track";
+      return true;
+    }
+    case TargetRequest::Mode::kTrackId: {
+      for (const auto& t : tracks) {
+        if (t.id != r.track_id) continue;
+        if (!lockable(t)) return refuse("track " + std::to_string(r.track_id) + " is tentative");
+        lock(t, "by request for its id");
+        return true;
+      }
+      return refuse("no track " + std::to_string(r.track_id));
+    }
+    case TargetRequest::Mode::kImagePoint: {
+      const CameraView& view = r.camera == Side::kLeft ? left : right;
+      if (!r.pixel.allFinite() || r.pixel.x() < 0 || r.pixel.y() < 0 ||
+          r.pixel.x() > view.width - 1 || r.pixel.y() > view.height - 1) {
+        return refuse("point outside the image");
+      }
+      const Track* best = nullptr;
+      double best_px = std::numeric_limits<double>::infinity();
+      for (const auto& t : tracks) {
+        if (!lockable(t)) continue;
+        const Eigen::Vector2d px = view.project(t.position());
+        if (!px.allFinite()) continue;
+        const double range = (t.position() - view.position_head_m).norm();
+        const double radius_px = range > 0 ? view.intrinsics.fx * t.radius_m / range : 0;
+        const double d = (px - r.pixel).norm();
+        if (d <= std::max(pick_radius_px_, 1.5 * radius_px) && d < best_px) {
+          best_px = d;
+          best = &t;
+        }
+      }
+      if (!best) return refuse("no confirmed track under the point");
+      lock(*best, "by request for an image point");
+      return true;
+    }
+  }
+  return refuse("unknown mode");
+}
+
+}  // namespace ptz::perception

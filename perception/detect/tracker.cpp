@@ -1,0 +1,227 @@
+#include "perception/detect/tracker.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+namespace ptz::perception {
+namespace {
+
+using Matrix9d = Eigen::Matrix<double, 9, 9>;
+
+// Transition and white-jerk process noise of the constant-acceleration model over dt.
+void motionModel(double dt, double q, Matrix9d* F, Matrix9d* Q) {
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  F->setIdentity();
+  F->block<3, 3>(0, 3) = dt * I;
+  F->block<3, 3>(0, 6) = dt * dt / 2 * I;
+  F->block<3, 3>(3, 6) = dt * I;
+  const double d2 = dt * dt, d3 = d2 * dt, d4 = d3 * dt, d5 = d4 * dt;
+  const double blocks[3][3] = {
+      {d5 / 20, d4 / 8, d3 / 6}, {d4 / 8, d3 / 3, d2 / 2}, {d3 / 6, d2 / 2, dt}};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) Q->block<3, 3>(3 * r, 3 * c) = q * blocks[r][c] * I;
+  }
+}
+
+}  // namespace
+
+const char* trackStateName(TrackState s) {
+  switch (s) {
+    case TrackState::kTentative:
+      return "tentative";
+    case TrackState::kConfirmed:
+      return "confirmed";
+    case TrackState::kCoasting:
+      return "coasting";
+  }
+  return "?";
+}
+
+Eigen::Vector3d Track::positionAt(double when_s) const {
+  const double dt = when_s - t_s;
+  return x.head<3>() + dt * x.segment<3>(3) + dt * dt / 2 * x.tail<3>();
+}
+
+Tracker::Tracker(TrackerParams params) : p_(params) {}
+
+const Track* Tracker::find(int64_t id) const {
+  for (const auto& t : tracks_) {
+    if (t.id == id) return &t;
+  }
+  return nullptr;
+}
+
+void Tracker::predict(Track* t, double t_s) const {
+  const double dt = t_s - t->t_s;
+  if (dt <= 0) return;
+  Matrix9d F, Q;
+  motionModel(dt, p_.jerk_psd_m2_s5, &F, &Q);
+  t->x = F * t->x;
+  t->P = F * t->P * F.transpose() + Q;
+  t->t_s = t_s;
+}
+
+Eigen::Matrix3d Tracker::measurementCovariance(const TrackMeasurement& m) const {
+  Eigen::Matrix3d R = m.covariance_m2;
+  if (!R.allFinite()) R.setZero();
+  R = (R + R.transpose()) / 2;
+  return R + Eigen::Matrix3d::Identity() * p_.min_position_sigma_m * p_.min_position_sigma_m;
+}
+
+double Tracker::distance2(const Track& t, const TrackMeasurement& m) const {
+  const Eigen::Matrix3d S = t.positionCovariance() + measurementCovariance(m);
+  const Eigen::Vector3d y = m.position_m - t.position();
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
+  if (ldlt.info() != Eigen::Success) return INFINITY;
+  const double d2 = y.dot(ldlt.solve(y));
+  return std::isfinite(d2) ? d2 : INFINITY;
+}
+
+void Tracker::correct(Track* t, const TrackMeasurement& m) const {
+  const Eigen::Matrix3d S = t->positionCovariance() + measurementCovariance(m);
+  const Eigen::Matrix<double, 9, 3> PHt = t->P.leftCols<3>();
+  const Eigen::Matrix<double, 9, 3> K = PHt * S.inverse();
+  t->x += K * (m.position_m - t->position());
+  // Joseph form: stays symmetric positive definite with tiny measurement noise.
+  Matrix9d IKH = Matrix9d::Identity();
+  IKH.leftCols<3>() -= K;
+  t->P = IKH * t->P * IKH.transpose() + K * measurementCovariance(m) * K.transpose();
+  t->P = (t->P + t->P.transpose()) / 2;
+}
+
+void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) const {
+  t->x.setZero();
+  t->x.head<3>() = m.position_m;
+  t->P.setZero();
+  t->P.topLeftCorner<3, 3>() = measurementCovariance(m);
+  t->P.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_speed_sigma_m_s, 2);
+  t->P.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_accel_sigma_m_s2, 2);
+  t->t_s = t->last_update_s = t->last_seen_s = t_s;
+  t->object_index = m.object_index;
+}
+
+Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
+  Track* best = nullptr;
+  double best_m = INFINITY;
+  for (auto& t : tracks_) {
+    if (t.state != TrackState::kCoasting || t.class_name != m.class_name) continue;
+    const double reach_m = p_.recover_speed_m_s * (t_s - t.last_update_s);
+    const double d = (m.position_m - t.position()).norm();
+    if (d <= reach_m && d < best_m) {
+      best_m = d;
+      best = &t;
+    }
+  }
+  return best;
+}
+
+void Tracker::start(double t_s, const TrackMeasurement& m) {
+  Track t;
+  t.id = next_id_++;
+  t.class_name = m.class_name;
+  t.x.head<3>() = m.position_m;
+  t.P.setZero();
+  t.P.topLeftCorner<3, 3>() = measurementCovariance(m);
+  t.P.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_speed_sigma_m_s, 2);
+  t.P.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_accel_sigma_m_s2, 2);
+  t.radius_m = m.radius_m;
+  t.t_s = t.first_s = t.last_update_s = t.last_seen_s = t_s;
+  t.hits = 1;
+  t.object_index = m.object_index;
+  t.state = p_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
+  tracks_.push_back(t);
+}
+
+void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measurements) {
+  if (started_ && t_s < last_t_s_) tracks_.clear();  // time went back: a new run of the source
+  if (!started_) last_t_s_ = t_s;
+  started_ = true;
+  for (auto& t : tracks_) {
+    predict(&t, t_s);
+    t.object_index = -1;
+  }
+  // Every gated (track, measurement) pair of one class, nearest first, each used once.
+  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    for (size_t j = 0; j < measurements.size(); ++j) {
+      if (tracks_[i].class_name != measurements[j].class_name) continue;
+      if (!measurements[j].position_m.allFinite()) continue;
+      const double d2 = distance2(tracks_[i], measurements[j]);
+      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2, i, j);
+    }
+  }
+  const double frame_dt = std::max(t_s - last_t_s_, 0.0);
+  last_t_s_ = t_s;
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<bool> track_used(tracks_.size()), meas_used(measurements.size());
+  std::vector<bool> updated(tracks_.size());
+  for (const auto& [d2, i, j] : pairs) {
+    if (track_used[i] || meas_used[j]) continue;
+    track_used[i] = meas_used[j] = true;
+    Track& t = tracks_[i];
+    const TrackMeasurement& m = measurements[j];
+    std::string untrusted = m.untrusted;
+    // The radius of a tentative track is still being learnt: its first measurement may be off.
+    if (untrusted.empty() && t.state != TrackState::kTentative && m.radius_m > 0 &&
+        t.radius_m > 0 &&
+        std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio) {
+      untrusted = "size";
+    }
+    t.last_seen_s = t_s;
+    if (!untrusted.empty()) {
+      ++t.untrusted_updates;
+      ++untrusted_counts_[untrusted];
+      continue;
+    }
+    correct(&t, m);
+    if (m.radius_m > 0) {
+      t.radius_m =
+          t.radius_m > 0 ? t.radius_m + p_.radius_filter * (m.radius_m - t.radius_m) : m.radius_m;
+    }
+    t.last_update_s = t_s;
+    t.object_index = m.object_index;
+    ++t.hits;
+    updated[i] = true;
+  }
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    if (t.state == TrackState::kTentative) {
+      if (t.hits >= p_.confirm_hits) t.state = TrackState::kConfirmed;
+    } else {
+      t.state = updated[i] ? TrackState::kConfirmed : TrackState::kCoasting;
+    }
+    if (!updated[i]) t.x.tail<3>() *= std::exp(-frame_dt / p_.coast_accel_decay_s);
+  }
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& t) {
+                                 const double unseen = t_s - t.last_seen_s;
+                                 const double limit = t.state == TrackState::kTentative
+                                                          ? p_.tentative_max_gap_s
+                                                          : p_.coast_s;
+                                 return unseen > limit || !t.x.allFinite() || !t.P.allFinite();
+                               }),
+                tracks_.end());
+  // Trusted measurements no track took start tentative tracks; untrusted ones are no centre.
+  for (size_t j = 0; j < measurements.size(); ++j) {
+    const TrackMeasurement& m = measurements[j];
+    if (meas_used[j] || !m.position_m.allFinite()) continue;
+    if (!m.untrusted.empty()) {
+      ++untrusted_counts_[m.untrusted];
+      continue;
+    }
+    if (Track* t = p_.recover_speed_m_s > 0 ? recoverable(t_s, m) : nullptr) {
+      restart(t, t_s, m);
+      t->state = TrackState::kConfirmed;
+      ++t->hits;
+      ++recoveries_;
+      continue;
+    }
+    start(t_s, m);
+  }
+}
+
+}  // namespace ptz::perception

@@ -1,0 +1,113 @@
+// Tracks with identity (no LCM): every triangulated object of a frame updates the track it belongs
+// to, or starts one. Each track is a Kalman filter in the head frame with a constant-acceleration
+// model (white jerk), which follows curved paths that a constant-velocity model lags on.
+// Association is gated by the Mahalanobis distance with the measurement's own covariance and made
+// globally nearest-first within a class. Life cycle: tentative -> confirmed after confirm_hits
+// measurements; a confirmed track not updated in a frame is coasting (its values the prediction)
+// and is deleted after coast_s without being seen; a tentative one after tentative_max_gap_s.
+// A coasting track's acceleration fades (coast_accel_decay_s), so its prediction goes on straight;
+// a trusted measurement near enough to a coasting track's prediction restarts it (a sharp turn).
+// A measurement that is seen but not trusted as the object's centre (cut by an image border,
+// areas of the two views out of line, or a radius that jumps against the track's) keeps its
+// track alive without moving it.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace ptz::perception {
+
+struct TrackerParams {
+  double jerk_psd_m2_s5 = 5.0;  // q: white jerk, (m/s^3)^2 per Hz, each axis
+  double gate_chi2 = 16.27;     // chi-square, 3 dof, p = 0.001
+  double initial_speed_sigma_m_s = 2.0;
+  double initial_accel_sigma_m_s2 = 4.0;
+  double min_position_sigma_m = 0.003;  // added to every measurement's covariance
+  int confirm_hits = 3;
+  double tentative_max_gap_s = 0.25;
+  double coast_s = 2.5;  // longer than the controller's coast_s, so it has a track to follow
+  double max_radius_ratio = 1.25;  // trusted radii are within this factor of the track's
+  double radius_filter = 0.3;      // weight of a new radius in the track's average
+  // While a track coasts its acceleration fades with this time constant: an old turn rate is no
+  // guide to where a hidden object goes, and extrapolating it quadratically runs away.
+  double coast_accel_decay_s = 0.3;
+  // A trusted measurement no gate took, within recover_speed_m_s times the time since the last
+  // update of a coasting track's prediction, restarts that track there (same id, velocity
+  // unknown): an object that turned sharply (a bounce, a reversal) keeps its identity. 0: off.
+  double recover_speed_m_s = 1.5;
+};
+
+enum class TrackState { kTentative, kConfirmed, kCoasting };
+const char* trackStateName(TrackState s);
+
+struct TrackMeasurement {
+  std::string class_name;
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // head frame
+  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();
+  double radius_m = 0;    // <= 0: unknown
+  std::string untrusted;  // why it is not the object's centre ("" = trusted)
+  int object_index = -1;  // into the frame's objects
+};
+
+struct Track {
+  int64_t id = 0;
+  std::string class_name;
+  TrackState state = TrackState::kTentative;
+  Eigen::Matrix<double, 9, 1> x = Eigen::Matrix<double, 9, 1>::Zero();  // p, v, a
+  Eigen::Matrix<double, 9, 9> P = Eigen::Matrix<double, 9, 9>::Identity();
+  double radius_m = 0;
+  double t_s = 0;  // time of x and P
+  double first_s = 0, last_update_s = 0, last_seen_s = 0;
+  int hits = 0;
+  int untrusted_updates = 0;
+  int object_index = -1;  // the measurement that updated it in the last frame (-1: none)
+
+  Eigen::Vector3d position() const { return x.head<3>(); }
+  Eigen::Vector3d velocity() const { return x.segment<3>(3); }
+  Eigen::Vector3d acceleration() const { return x.tail<3>(); }
+  Eigen::Matrix3d positionCovariance() const { return P.topLeftCorner<3, 3>(); }
+  Eigen::Matrix3d velocityCovariance() const { return P.block<3, 3>(3, 3); }
+  // Position extrapolated to t_s by the motion model (no state change).
+  Eigen::Vector3d positionAt(double t_s) const;
+};
+
+class Tracker {
+ public:
+  explicit Tracker(TrackerParams params = {});
+
+  // One frame's measurements at capture time t_s. Times that go back start afresh (a restarted
+  // source); ids are never reused.
+  void update(double t_s, const std::vector<TrackMeasurement>& measurements);
+  const std::vector<Track>& tracks() const { return tracks_; }
+  const Track* find(int64_t id) const;
+  // Measurements not trusted as a centre, by reason, since the start.
+  const std::map<std::string, int64_t>& untrustedCounts() const { return untrusted_counts_; }
+  // Tracks restarted by a measurement outside their gate (sharp turns), since the start.
+  int64_t recoveries() const { return recoveries_; }
+  int64_t tracksStarted() const { return next_id_ - 1; }
+
+ private:
+  void predict(Track* t, double t_s) const;
+  // Mahalanobis distance^2 of m from t's prediction (t already predicted to m's time).
+  double distance2(const Track& t, const TrackMeasurement& m) const;
+  void correct(Track* t, const TrackMeasurement& m) const;
+  Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
+  void start(double t_s, const TrackMeasurement& m);
+  // The coasting track of m's class whose prediction is nearest m within the recovery radius.
+  Track* recoverable(double t_s, const TrackMeasurement& m);
+  void restart(Track* t, double t_s, const TrackMeasurement& m) const;
+
+  TrackerParams p_;
+  std::vector<Track> tracks_;
+  int64_t next_id_ = 1;
+  double last_t_s_ = 0;
+  bool started_ = false;
+  std::map<std::string, int64_t> untrusted_counts_;
+  int64_t recoveries_ = 0;
+};
+
+}  // namespace ptz::perception

@@ -1,0 +1,378 @@
+// Tracks and the target on analytic paths with known answers: identities through crossings and
+// gaps, the life cycle's times, untrusted measurements, and the selector's choices and refusals.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "perception/detect/stereo.hpp"
+#include "perception/detect/target.hpp"
+#include "perception/detect/tracker.hpp"
+
+using ptz::Side;
+using ptz::StereoRig;
+using ptz::perception::TargetRequest;
+using ptz::perception::TargetSelector;
+using ptz::perception::Track;
+using ptz::perception::Tracker;
+using ptz::perception::TrackerParams;
+using ptz::perception::TrackMeasurement;
+using ptz::perception::TrackState;
+
+namespace {
+
+constexpr double kFrameS = 1.0 / 30;
+
+TrackMeasurement at(const Eigen::Vector3d& p, const std::string& cls = "red_ball",
+                    double sigma_m = 0.005, int index = 0) {
+  TrackMeasurement m;
+  m.class_name = cls;
+  m.position_m = p;
+  m.covariance_m2 = Eigen::Matrix3d::Identity() * sigma_m * sigma_m;
+  m.radius_m = 0.1;
+  m.object_index = index;
+  return m;
+}
+
+Eigen::Vector3d circle(double t_s, double radius_m = 0.6, double speed_m_s = 1.5) {
+  const double w = speed_m_s / radius_m;
+  return {radius_m * std::cos(w * t_s), 0.2, 2.0 + radius_m * std::sin(w * t_s)};
+}
+
+const Track& only(const Tracker& tracker) {
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+  return tracker.tracks().front();
+}
+
+}  // namespace
+
+TEST(Tracker, ATrackIsConfirmedAfterItsHitsAndKeepsItsIdentity) {
+  Tracker tracker;
+  const Eigen::Vector3d v(0.4, -0.1, 0.3);
+  for (int k = 0; k < 60; ++k) {
+    tracker.update(k * kFrameS, {at(Eigen::Vector3d(0, 0, 3) + v * k * kFrameS)});
+    const Track& t = only(tracker);
+    EXPECT_EQ(t.id, 1);
+    EXPECT_EQ(t.state, k < 2 ? TrackState::kTentative : TrackState::kConfirmed) << "frame " << k;
+  }
+  // 2 s of a constant velocity: the filter has it to a few cm/s.
+  EXPECT_LT((only(tracker).velocity() - v).norm(), 0.03);
+}
+
+TEST(Tracker, FollowsACircleWithOneIdentityAndItsVelocity) {
+  // The circle: 0.6 m radius at 1.5 m/s (3.75 m/s^2 inwards), 2 m away, 5 mm noise.
+  Tracker tracker;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 0.005);
+  const double r = 0.6, w = 1.5 / r;
+  double sum2 = 0, sum2_velocity = 0;
+  int n = 0;
+  for (int k = 0; k < 300; ++k) {
+    const double t = k * kFrameS;
+    const Eigen::Vector3d p = circle(t) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    tracker.update(t, {at(p)});
+    if (k < 60) continue;  // 2 s to settle
+    const Track& track = only(tracker);
+    const Eigen::Vector3d v(-r * w * std::sin(w * t), 0, r * w * std::cos(w * t));
+    sum2 += (track.position() - circle(t)).squaredNorm();
+    sum2_velocity += (track.velocity() - v).squaredNorm();
+    ++n;
+  }
+  EXPECT_EQ(tracker.tracksStarted(), 1);
+  // Below the raw noise (8.7 mm), and the velocity within 10 % of the speed: a
+  // constant-velocity filter of the same noise lags the turn (its velocity lags by ~0.3 m/s).
+  EXPECT_LT(std::sqrt(sum2 / n), 0.008);
+  EXPECT_LT(std::sqrt(sum2_velocity / n), 0.15);
+}
+
+TEST(Tracker, TwoObjectsOfOneClassCrossingKeepTheirIds) {
+  // One passes 0.5 m in front of the other (seen from the rig their images cross).
+  Tracker tracker;
+  for (int k = 0; k < 120; ++k) {
+    const double t = k * kFrameS;
+    const Eigen::Vector3d a(-1.0 + 0.5 * t, 0, 3.0), b(1.0 - 0.5 * t, 0, 2.5);
+    // The measurements come in either order (a first in the first frame: track 1).
+    if (k % 2 == 0) {
+      tracker.update(t, {at(a, "red_ball", 0.005, 0), at(b, "red_ball", 0.005, 1)});
+    } else {
+      tracker.update(t, {at(b, "red_ball", 0.005, 0), at(a, "red_ball", 0.005, 1)});
+    }
+    ASSERT_EQ(tracker.tracks().size(), 2u);
+    for (const auto& track : tracker.tracks()) {
+      const Eigen::Vector3d truth = track.id == 1 ? a : b;
+      EXPECT_LT((track.position() - truth).norm(), 0.02) << "frame " << k << " track " << track.id;
+    }
+  }
+  EXPECT_EQ(tracker.tracksStarted(), 2);
+}
+
+TEST(Tracker, ATrackCoastsThroughAGapAndIsFoundAgainByItsPrediction) {
+  TrackerParams params;
+  params.coast_s = 1.5;
+  Tracker tracker(params);
+  auto truth = [](double t) { return Eigen::Vector3d(-0.8 + 0.6 * t, 0.1, 3.0); };
+  int k = 0;
+  for (; k < 45; ++k) tracker.update(k * kFrameS, {at(truth(k * kFrameS))});
+  // 1.2 s behind a box: coasting on the prediction.
+  for (; k < 81; ++k) {
+    tracker.update(k * kFrameS, {});
+    const Track& t = only(tracker);
+    EXPECT_EQ(t.state, TrackState::kCoasting);
+    EXPECT_LT((t.position() - truth(k * kFrameS)).norm(), 0.03) << "frame " << k;
+  }
+  tracker.update(k * kFrameS, {at(truth(k * kFrameS))});
+  EXPECT_EQ(only(tracker).id, 1);
+  EXPECT_EQ(only(tracker).state, TrackState::kConfirmed);
+  EXPECT_EQ(tracker.tracksStarted(), 1);
+}
+
+TEST(Tracker, AnObjectThatReversesKeepsItsIdentity) {
+  // 0.5 m/s to the right, then at once 0.5 m/s back (a bounce): outside the gate for a while,
+  // but within recover_speed_m_s of the coasting prediction, so the same track restarts there.
+  Tracker tracker;
+  auto x = [](double t) { return t < 2 ? 0.5 * t : 1.0 - 0.5 * (t - 2); };
+  for (int k = 0; k < 120; ++k) {
+    const double t = k * kFrameS;
+    tracker.update(t, {at({x(t), 0, 3})});
+  }
+  EXPECT_EQ(tracker.tracksStarted(), 1);
+  EXPECT_GE(tracker.recoveries(), 1);
+  EXPECT_LT(only(tracker).velocity().x(), -0.4);
+  EXPECT_NEAR(only(tracker).position().x(), x(119 * kFrameS), 0.01);
+}
+
+TEST(Tracker, TracksAreDeletedAfterTheirTimes) {
+  TrackerParams params;
+  params.coast_s = 1.0;
+  params.tentative_max_gap_s = 0.2;
+  Tracker tracker(params);
+  for (int k = 0; k < 10; ++k) tracker.update(k * kFrameS, {at({0, 0, 3})});
+  tracker.update(0.5, {at({2, 0, 5})});  // a new object: tentative
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  tracker.update(0.72, {});  // tentative: 0.22 s unseen
+  ASSERT_EQ(tracker.tracks().size(), 1u);
+  EXPECT_EQ(tracker.tracks()[0].id, 1);
+  tracker.update(9 * kFrameS + 0.99, {});
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+  tracker.update(9 * kFrameS + 1.01, {});
+  EXPECT_TRUE(tracker.tracks().empty());
+}
+
+TEST(Tracker, UntrustedMeasurementsKeepATrackAliveWithoutMovingIt) {
+  TrackerParams params;
+  params.coast_s = 0.5;
+  Tracker tracker(params);
+  for (int k = 0; k < 30; ++k) tracker.update(k * kFrameS, {at({0, 0, 3})});
+  const Eigen::Vector3d before = only(tracker).position();
+  // Half hidden for 1 s: the centre is off by 1 cm and the radius shrinks (size), or the region
+  // is cut by the image border.
+  for (int k = 30; k < 60; ++k) {
+    TrackMeasurement m = at({0.01, 0, 3});
+    if (k % 2) {
+      m.radius_m = 0.07;
+    } else {
+      m.untrusted = "border";
+    }
+    tracker.update(k * kFrameS, {m});
+    EXPECT_EQ(only(tracker).state, TrackState::kCoasting);
+  }
+  EXPECT_LT((only(tracker).position() - before).norm(), 1e-6);
+  EXPECT_EQ(tracker.untrustedCounts().at("size"), 15);
+  EXPECT_EQ(tracker.untrustedCounts().at("border"), 15);
+  EXPECT_EQ(only(tracker).untrusted_updates, 30);
+  // Seen all along, so not deleted although 1 s > coast_s without an update.
+  tracker.update(60 * kFrameS, {at({0, 0, 3})});
+  EXPECT_EQ(only(tracker).id, 1);
+}
+
+TEST(Tracker, BadMeasurementsAndTimeGoingBack) {
+  Tracker tracker;
+  tracker.update(1.0, {at({NAN, 0, 3}), at({0, 0, 3})});
+  EXPECT_EQ(tracker.tracks().size(), 1u);
+  TrackMeasurement degenerate = at({0, 0, 3});
+  degenerate.covariance_m2 = Eigen::Matrix3d::Constant(NAN);
+  tracker.update(1.0 + kFrameS, {degenerate});
+  EXPECT_TRUE(only(tracker).P.allFinite());
+  EXPECT_EQ(only(tracker).hits, 2);
+  tracker.update(0.5, {at({1, 0, 3})});  // a restarted source
+  EXPECT_EQ(only(tracker).id, 2);
+}
+
+TEST(Tracker, AnotherClassNeverUpdatesATrack) {
+  Tracker tracker;
+  for (int k = 0; k < 5; ++k) tracker.update(k * kFrameS, {at({0, 0, 3})});
+  tracker.update(5 * kFrameS, {at({0, 0, 3}, "green_box")});
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  EXPECT_EQ(tracker.find(1)->state, TrackState::kCoasting);
+  EXPECT_EQ(tracker.find(2)->class_name, "green_box");
+}
+
+namespace {
+
+struct Scene {
+  StereoRig rig = StereoRig::makeDefault();
+  ptz::CameraView left = rig.view(Side::kLeft, {0, 0, 1});
+  ptz::CameraView right = rig.view(Side::kRight, {0, 0, 1});
+  Tracker tracker;
+  TargetSelector selector{"red_ball", {"red_ball", "green_box"}};
+  double t_s = 0;
+
+  int64_t step(const std::vector<TrackMeasurement>& m) {
+    tracker.update(t_s, m);
+    const int64_t id = selector.choose(t_s, tracker.tracks());
+    t_s += kFrameS;
+    return id;
+  }
+};
+
+}  // namespace
+
+TEST(TargetSelector, LocksNearTheAxisAndStaysWhenABiggerNearerOneAppears) {
+  Scene s;
+  // Two balls: one near the axis at 3 m, one off-axis.
+  for (int k = 0; k < 5; ++k) {
+    s.step({at({0.9, 0, 3}, "red_ball", 0.005, 0), at({0.1, 0, 3}, "red_ball", 0.005, 1)});
+  }
+  EXPECT_EQ(s.selector.targetId(), 2);
+  // A ball 0.5 m nearer, bigger, passes in front of the target and on.
+  for (int k = 0; k < 60; ++k) {
+    const double x = -0.6 + 0.03 * k;
+    TrackMeasurement near = at({x, 0, 2.5}, "red_ball", 0.005, 2);
+    near.radius_m = 0.15;
+    EXPECT_EQ(s.step({at({0.9, 0, 3}, "red_ball", 0.005, 0), at({0.1, 0, 3}, "red_ball", 0.005, 1),
+                      near}),
+              2)
+        << "frame " << k;
+  }
+}
+
+TEST(TargetSelector, ReacquiresByThePredictionAfterTheTrackIsDeleted) {
+  Scene s;
+  TrackerParams params;
+  params.coast_s = 0.3;
+  s.tracker = Tracker(params);
+  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
+  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+  ASSERT_EQ(s.selector.targetId(), 1);
+  for (int k = 0; k < 15; ++k) s.step({});  // 0.5 s: deleted
+  EXPECT_EQ(s.selector.targetId(), -1);
+  EXPECT_NE(s.selector.reason().find("lost track 1"), std::string::npos) << s.selector.reason();
+  // Two candidates: one on the axis, one where the target went.
+  for (int k = 0; k < 4; ++k) {
+    s.step({at({0, 0, 3}, "red_ball", 0.005, 0), at(path(s.t_s), "red_ball", 0.005, 1)});
+  }
+  const Track* t = s.tracker.find(s.selector.targetId());
+  ASSERT_NE(t, nullptr);
+  EXPECT_GT(t->position().x(), 0.5);
+  EXPECT_NE(s.selector.reason().find("by prediction"), std::string::npos) << s.selector.reason();
+}
+
+TEST(TargetSelector, RequestsAreMetOrRefusedWithoutChangingTheTarget) {
+  Scene s;
+  for (int k = 0; k < 5; ++k) {
+    s.step({at({0.0, 0, 3}, "red_ball", 0.005, 0), at({0.6, 0, 3}, "red_ball", 0.005, 1),
+            at({-0.5, 0.2, 2}, "green_box", 0.005, 2)});
+  }
+  ASSERT_EQ(s.selector.targetId(), 1);
+  const auto& tracks = s.tracker.tracks();
+  std::string why;
+  auto refused = [&](const TargetRequest& r) {
+    why.clear();
+    const bool ok = s.selector.request(r, tracks, s.left, s.right, &why);
+    return !ok && !why.empty() && s.selector.targetId() == 1;
+  };
+  TargetRequest r;
+  r.mode = TargetRequest::Mode::kTrackId;
+  r.track_id = 99;
+  EXPECT_TRUE(refused(r)) << why;
+  r.mode = TargetRequest::Mode::kClass;
+  r.class_name = "purple_cube";
+  EXPECT_TRUE(refused(r)) << why;
+  r.mode = TargetRequest::Mode::kImagePoint;
+  r.pixel = {NAN, 10};
+  EXPECT_TRUE(refused(r)) << why;
+  r.pixel = {640, 10};
+  EXPECT_TRUE(refused(r)) << why;
+  r.pixel = {5, 5};  // nothing there
+  EXPECT_TRUE(refused(r)) << why;
+
+  // The pixel of track 2 in the right image selects it.
+  r.camera = Side::kRight;
+  r.pixel = s.right.project(s.tracker.find(2)->position()) + Eigen::Vector2d(3, -2);
+  ASSERT_TRUE(s.selector.request(r, tracks, s.left, s.right, &why)) << why;
+  EXPECT_EQ(s.selector.targetId(), 2);
+  EXPECT_EQ(s.step({at({0.0, 0, 3}, "red_ball", 0.005, 0), at({0.6, 0, 3}, "red_ball", 0.005, 1),
+                    at({-0.5, 0.2, 2}, "green_box", 0.005, 2)}),
+            2);
+  // By id, then by class: the box.
+  r.mode = TargetRequest::Mode::kTrackId;
+  r.track_id = 1;
+  ASSERT_TRUE(s.selector.request(r, s.tracker.tracks(), s.left, s.right, &why)) << why;
+  EXPECT_EQ(s.selector.targetId(), 1);
+  r.mode = TargetRequest::Mode::kClass;
+  r.class_name = "green_box";
+  ASSERT_TRUE(s.selector.request(r, s.tracker.tracks(), s.left, s.right, &why)) << why;
+  EXPECT_EQ(s.step({at({0.0, 0, 3}, "red_ball", 0.005, 0), at({0.6, 0, 3}, "red_ball", 0.005, 1),
+                    at({-0.5, 0.2, 2}, "green_box", 0.005, 2)}),
+            3);
+  EXPECT_EQ(s.selector.targetClass(), "green_box");
+}
+
+TEST(TrackMeasurements, CentresThatAreNotTheObjectsAreNotTrusted) {
+  const StereoRig rig = StereoRig::makeDefault();
+  const ptz::CameraView lv = rig.view(Side::kLeft, {0, 0, 1}),
+                        rv = rig.view(Side::kRight, {0, 0, 1});
+  auto disc = [](double x, double y, double r, int cls = 0) {
+    ptz::perception::Region g;
+    g.class_index = cls;
+    g.centroid_px = {x, y};
+    g.area_px2 = M_PI * r * r;
+    g.bbox = cv::Rect(static_cast<int>(x - r), static_cast<int>(y - r), static_cast<int>(2 * r),
+                      static_cast<int>(2 * r));
+    return g;
+  };
+  auto box = [](int x, int y, int w, int h) {
+    ptz::perception::Region g;
+    g.class_index = 1;
+    g.centroid_px = {x + w / 2.0, y + h / 2.0};
+    g.area_px2 = w * h;
+    g.bbox = cv::Rect(x, y, w, h);
+    return g;
+  };
+  const std::vector<std::string> classes = {"red_ball", "green_box"};
+  auto judge = [&](const std::vector<ptz::perception::Region>& l,
+                   const std::vector<ptz::perception::Region>& r,
+                   const std::vector<Track>& tracks = {}) {
+    ptz::perception::StereoObject o;
+    o.left = 0;
+    o.right = 0;
+    o.class_index = l[0].class_index;
+    o.position_head_m = {0, 0, 3};
+    o.covariance_m2 = Eigen::Matrix3d::Identity() * 1e-4;
+    return ptz::perception::trackMeasurements({o}, l, r, lv, rv, classes, 1.3, tracks, 0.0)[0]
+        .untrusted;
+  };
+  EXPECT_EQ(judge({disc(300, 240, 20)}, {disc(280, 240, 20)}), "");
+  EXPECT_EQ(judge({disc(10, 240, 20)}, {disc(280, 240, 20)}), "border");
+  EXPECT_EQ(judge({disc(300, 240, 20)}, {disc(280, 240, 25)}), "lr_area");  // 1.56 x the area
+  // Next to a box (2 px apart): one may hide the other; 4 px apart it does not.
+  EXPECT_EQ(judge({disc(300, 240, 20), box(322, 200, 60, 80)}, {disc(280, 240, 20)}), "touching");
+  EXPECT_EQ(judge({disc(300, 240, 20), box(324, 200, 60, 80)}, {disc(280, 240, 20)}), "");
+  // Two discs whose boxes overlap at a corner but whose discs are 10 px apart: not touching.
+  const double d = (20 + 20 + 10) / std::sqrt(2.0);
+  EXPECT_EQ(judge({disc(300, 240, 20), disc(300 + d, 240 + d, 20)}, {disc(280, 240, 20)}), "");
+  // One region over the predicted images of two tracks of its class: merged objects.
+  std::vector<Track> two(2);
+  for (int i = 0; i < 2; ++i) {
+    two[i].id = i + 1;
+    two[i].class_name = "red_ball";
+    two[i].state = TrackState::kConfirmed;
+    two[i].radius_m = 0.1;
+  }
+  two[0].x.head<3>() = Eigen::Vector3d(0.0, 0, 3);
+  two[1].x.head<3>() = Eigen::Vector3d(0.03, 0, 2.5);
+  const Eigen::Vector2d a = lv.project(two[0].position()), b = rv.project(two[0].position());
+  EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "overlap");
+  two[1].x.head<3>() = Eigen::Vector3d(1.0, 0, 2.5);  // elsewhere: one track under it
+  EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "");
+}

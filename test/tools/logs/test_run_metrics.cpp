@@ -1,0 +1,250 @@
+// The run's numbers on made-up runs whose answers are known by construction: a target behind a
+// camera or near 90 degrees off its axis, frames never answered, a run without a pose, the
+// tracked object by identity, poses before their truth in any order, search and coast times;
+// and ptz-log-summary's JSON and CSV of a logged run.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <random>
+
+#include "support/run_program.hpp"
+#include "tools/logs/run_metrics.hpp"
+#include "tools/logs/synthetic_run.hpp"
+
+using ptz::tools::RunMetrics;
+using ptzstereo::control_state_t;
+namespace syn = ptz::test::synthetic;
+
+namespace {
+
+const syn::Object kBall{"ball", "red_ball", {0, 0, 2}};
+// The centred ball's offset in each camera: half the baseline at 2 m.
+constexpr double kCentredPx = syn::kFocalPx * syn::kHalfBaselineM / 2;
+
+std::string tempPath(const std::string& name) {
+  return std::string(::testing::TempDir()) + "run_metrics_" + name;
+}
+
+}  // namespace
+
+TEST(RunMetrics, ATargetBehindACameraIsOutsideTheImageAndNotInTheCentring) {
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 4; ++seq) {
+    syn::Object ball = kBall;
+    if (seq == 2) ball.position_m = {0, 0, -2};  // behind both cameras
+    m.onTruth(syn::truth(seq, {ball}));
+  }
+  const auto s = m.summary();
+  EXPECT_EQ(s.frames_target_outside_image, 1);
+  EXPECT_EQ(s.centering_samples, 6);  // both cameras of frames 0, 1 and 3
+  EXPECT_NEAR(s.centering_rms_px, kCentredPx, 1e-9);
+  EXPECT_NEAR(s.centering_max_px, kCentredPx, 1e-9);
+  EXPECT_EQ(m.centeringByFrame().count(2), 0u);
+}
+
+TEST(RunMetrics, ATargetNearlyNinetyDegreesOffTheAxisIsAPinholeOffsetNotAnAbsurdOne) {
+  // The simulator's barrel distortion: its polynomial gives ~1e9 px this far out.
+  ptzstereo::sim_truth_t t = syn::truth(0, {});
+  for (auto* cam : {&t.left_camera, &t.right_camera}) {
+    const double k[5] = {-0.12, 0.04, 0.0004, -0.0003, 0};
+    std::copy(k, k + 5, cam->distortion);
+  }
+  const double angle = 88 * M_PI / 180;
+  ptzstereo::sim_object_truth_t o{};
+  o.name = "ball";
+  o.class_name = "red_ball";
+  o.position_m[0] = 2 * std::sin(angle) - syn::kHalfBaselineM;  // 88 deg off the left axis
+  o.position_m[2] = 2 * std::cos(angle);
+  t.objects = {o};
+  t.num_objects = 1;
+  RunMetrics m("red_ball", 0.0);
+  m.onTruth(t);
+  const auto s = m.summary();
+  EXPECT_EQ(s.frames_target_outside_image, 1);
+  EXPECT_EQ(s.centering_samples, 2);
+  EXPECT_NEAR(s.centering_max_px, syn::kFocalPx * std::tan(angle), 1e-6);  // 14318 px
+}
+
+TEST(RunMetrics, FramesTheDetectorNeverAnsweredCountAsLost) {
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 10; ++seq) {
+    m.onFrame(syn::frame(seq));
+    m.onTruth(syn::truth(seq, {kBall}));
+    if (seq == 3) m.onPose(syn::pose(seq));
+    if (seq <= 5 && seq != 3) m.onPose(syn::pose(seq, "red_ball", kBall.position_m));
+  }
+  const auto s = m.summary();
+  EXPECT_EQ(s.frames_published, 10);
+  EXPECT_EQ(s.frames_processed, 6);
+  EXPECT_EQ(s.poses_without_target, 1);
+  EXPECT_EQ(s.frames_without_pose, 4);
+  EXPECT_NEAR(s.target_lost_s, 0.5, 1e-9);  // 4 unanswered + 1 without a target, at 10 Hz
+  EXPECT_NEAR(s.time_to_acquire_s, 0.0, 1e-9);
+  EXPECT_NEAR(s.position_error_rms_m, 0.0, 1e-12);
+}
+
+TEST(RunMetrics, ARunWithoutAnyPoseIsLostForItsWholeDuration) {
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 20; ++seq) m.onTruth(syn::truth(seq, {kBall}));
+  auto s = m.summary();
+  EXPECT_EQ(s.frames_published, 20);  // seen in SIM_TRUTH
+  EXPECT_EQ(s.frames_processed, 0);
+  EXPECT_EQ(s.frames_without_pose, 20);
+  EXPECT_NEAR(s.target_lost_s, 2.0, 1e-9);
+  EXPECT_TRUE(std::isnan(s.time_to_acquire_s));
+  EXPECT_NE(s.toJson().find("\"time_to_acquire_s\": null"), std::string::npos) << s.toJson();
+  EXPECT_TRUE(std::isnan(s.search_time_s));  // no CONTROL_STATE: unknown, not 0
+  // The simulator published 25: the 5 this listener never saw were not answered either.
+  ptzstereo::process_status_t status{};
+  status.process = "ptz-sim";
+  status.counters.push_back({"frames_published", 25});
+  status.num_counters = 1;
+  m.onStatus(status);
+  s = m.summary();
+  EXPECT_EQ(s.frames_without_pose, 25);
+  EXPECT_NEAR(s.target_lost_s, 2.5, 1e-9);
+}
+
+TEST(RunMetrics, TheTrackedObjectIsScoredByIdentityAndASwitchIsCounted) {
+  // ball_b first in SIM_TRUTH; a green box nearer to the estimate than ball_a is.
+  const std::vector<syn::Object> objects = {{"ball_b", "red_ball", {0.5, 0, 2}},
+                                            {"box", "green_box", {0.012, 0, 2}},
+                                            {"ball_a", "red_ball", {0, 0, 2}}};
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 12; ++seq) {
+    m.onTruth(syn::truth(seq, objects));
+    if (seq < 2) m.onPose(syn::pose(seq));
+    if (seq >= 2 && seq <= 6) m.onPose(syn::pose(seq, "red_ball", {0.01, 0, 2}));
+    if (seq >= 7) m.onPose(syn::pose(seq, "red_ball", {0.5, 0, 2.02}));
+  }
+  const auto s = m.summary();
+  EXPECT_EQ(s.target_switches, 1);
+  EXPECT_EQ(s.position_samples, 10);
+  EXPECT_NEAR(s.position_error_rms_m, std::sqrt((5 * 0.01 * 0.01 + 5 * 0.02 * 0.02) / 10), 1e-9);
+  const double pct_a = 100 * 0.01 / 2, pct_b = 100 * 0.02 / std::hypot(0.5, 2.0);
+  EXPECT_NEAR(s.position_error_rms_pct_of_range,
+              std::sqrt((5 * pct_a * pct_a + 5 * pct_b * pct_b) / 10), 1e-9);
+  const auto frames = m.frames();
+  EXPECT_EQ(frames.at(1).tracked, "");
+  EXPECT_EQ(frames.at(3).tracked, "ball_a");
+  EXPECT_EQ(frames.at(8).tracked, "ball_b");
+  EXPECT_EQ(frames.at(8).tracked_truth_m[0], 0.5);
+  // Centring: before the first acquisition the first of the class (ball_b), then the one
+  // tracked.
+  const auto centring = m.centeringByFrame();
+  const double b_left = syn::kFocalPx * 0.55 / 2, b_right = syn::kFocalPx * 0.45 / 2;
+  EXPECT_NEAR(centring.at(0)[0], b_left, 1e-9);
+  EXPECT_NEAR(centring.at(4)[0], kCentredPx, 1e-9);
+  EXPECT_NEAR(centring.at(4)[2], -kCentredPx, 1e-9);
+  EXPECT_NEAR(centring.at(9)[0], b_left, 1e-9);
+  EXPECT_NEAR(centring.at(9)[2], b_right, 1e-9);
+}
+
+TEST(RunMetrics, APoseBeforeItsTruthIsScoredAndTheArrivalOrderDoesNotMatter) {
+  // 30 frames of two balls crossing; every kind of message, then fed in three orders.
+  std::vector<std::function<void(RunMetrics&)>> messages;
+  int64_t with_target = 0;
+  for (int64_t seq = 0; seq < 30; ++seq) {
+    const double x = 0.02 * seq;
+    const std::vector<syn::Object> objects = {{"ball_a", "red_ball", {x, 0.1, 2.5}},
+                                              {"ball_b", "red_ball", {0.6 - x, -0.1, 2.5}}};
+    const auto truth = syn::truth(seq, objects);
+    const auto pose = seq % 7 == 3
+                          ? syn::pose(seq)
+                          : syn::pose(seq, "red_ball", {(seq < 15 ? x : 0.6 - x) + 0.003, 0, 2.5});
+    with_target += pose.target_index >= 0;
+    const int8_t state =
+        seq < 4 ? control_state_t::STATE_SEARCHING : control_state_t::STATE_TRACKING;
+    messages.push_back([=](RunMetrics& m) { m.onFrame(syn::frame(seq)); });
+    messages.push_back([=](RunMetrics& m) { m.onTruth(truth); });
+    messages.push_back([=](RunMetrics& m) { m.onPose(pose); });
+    messages.push_back([=](RunMetrics& m) { m.onSetpoint(syn::setpoint(seq)); });
+    messages.push_back([=](RunMetrics& m) { m.onControlState(syn::control(seq, state)); });
+  }
+  const auto run = [&](const std::vector<std::function<void(RunMetrics&)>>& order) {
+    RunMetrics m("red_ball", 0.5);
+    for (const auto& f : order) f(m);
+    return m.summary();
+  };
+  const auto in_order = run(messages);
+  EXPECT_EQ(in_order.position_samples, with_target);
+  EXPECT_EQ(in_order.target_switches, 1);
+  auto reversed = messages;  // every pose before its truth, every setpoint before its frame
+  std::reverse(reversed.begin(), reversed.end());
+  const auto backwards = run(reversed);
+  EXPECT_EQ(backwards.position_samples, with_target);
+  EXPECT_EQ(backwards.toJson(), in_order.toJson());
+  auto shuffled = messages;
+  std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(7));
+  EXPECT_EQ(run(shuffled).toJson(), in_order.toJson());
+}
+
+TEST(RunMetrics, SearchAndCoastTimesComeFromControlState) {
+  const int8_t S = control_state_t::STATE_SEARCHING, T = control_state_t::STATE_TRACKING,
+               C = control_state_t::STATE_COASTING;
+  const int8_t states[10] = {S, S, S, T, T, C, C, S, T, T};
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 10; ++seq) {
+    m.onTruth(syn::truth(seq, {kBall}));
+    m.onPose(seq < 3 ? syn::pose(seq) : syn::pose(seq, "red_ball", kBall.position_m));
+    m.onControlState(syn::control(seq, states[seq]));
+  }
+  const auto s = m.summary();
+  EXPECT_NEAR(s.search_time_s, 0.4, 1e-9);
+  EXPECT_NEAR(s.coast_time_s, 0.2, 1e-9);
+  EXPECT_NEAR(s.time_to_acquire_s, 0.3, 1e-9);
+  EXPECT_EQ(m.frames().at(5).control_state, C);
+  EXPECT_NE(s.toJson().find("\"search_time_s\": 0.4,"), std::string::npos) << s.toJson();
+}
+
+TEST(LogSummary, TheRunsNumbersAndThePerFrameCsvOfALoggedRun) {
+  const std::string log = tempPath("known.lcmlog"), json = tempPath("known.json"),
+                    csv = tempPath("known.csv");
+  syn::writeKnownRun(log);
+  const auto r = ptz::test::runProgram(
+      {PTZ_LOG_SUMMARY_BIN, "--log", log, "--json", json, "--csv", csv, "--settle-s", "0"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream j(json);
+  const std::string summary((std::istreambuf_iterator<char>(j)), std::istreambuf_iterator<char>());
+  using K = syn::KnownRun;
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, std::string>>{{"frames_published", "20"},
+                                                        {"frames_processed", "18"},
+                                                        {"frames_without_pose", "2"},
+                                                        {"poses_without_target", "5"},
+                                                        {"target_lost_s", "0.7"},
+                                                        {"time_to_acquire_s", "0.5"},
+                                                        {"search_time_s", "0.3"},
+                                                        {"coast_time_s", "0.2"},
+                                                        {"target_switches", "1"}}) {
+    EXPECT_NE(summary.find("\"" + key + "\": " + value + ","), std::string::npos) << key << " in\n"
+                                                                                  << summary;
+  }
+  const double rms =
+      std::sqrt((K::kOnA * K::kErrorAM * K::kErrorAM + K::kOnB * K::kErrorBM * K::kErrorBM) /
+                (K::kOnA + K::kOnB));
+  const auto at = summary.find("\"position_error_rms_m\": ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_NEAR(std::strtod(summary.c_str() + at + 24, nullptr), rms, 1e-6);
+  EXPECT_NE(r.out.find("\"target_switches\": 1"), std::string::npos) << r.out;
+  std::ifstream c(csv);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(c, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 1u + K::kFrames);
+  EXPECT_EQ(lines[0],
+            "t_s,frame_seq,left_pan_rad,left_tilt_rad,left_zoom,right_pan_rad,right_tilt_rad,"
+            "right_zoom,pose,target,tracked_object,control_state");
+  const auto ends = [](const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  EXPECT_TRUE(ends(lines[1 + 0], ",0,0,,")) << lines[1];
+  EXPECT_TRUE(ends(lines[1 + 3], ",1,0,,searching")) << lines[4];
+  EXPECT_TRUE(ends(lines[1 + 6], ",1,1,ball_a,tracking")) << lines[7];
+  EXPECT_TRUE(ends(lines[1 + 12], ",1,0,,coasting")) << lines[13];
+  EXPECT_TRUE(ends(lines[1 + 15], ",1,1,ball_b,tracking")) << lines[16];
+  EXPECT_EQ(lines[1 + 10].rfind("1.000000,10,", 0), 0u) << lines[11];
+}
