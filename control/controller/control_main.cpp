@@ -186,10 +186,15 @@ std::optional<Observation> targetOf(const ptzstereo::object_tracks_t& m, std::st
         Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(t.position_covariance_m2);
     const Eigen::Vector3d v(t.velocity_m_s[0], t.velocity_m_s[1], t.velocity_m_s[2]);
     const Eigen::Vector3d a(t.acceleration_m_s2[0], t.acceleration_m_s2[1], t.acceleration_m_s2[2]);
-    // A non-finite velocity or acceleration makes the whole target implausible.
+    // A non-finite or absurd velocity or acceleration makes the whole target implausible (the
+    // lead would swing the heads to a limit).
+    constexpr double kMaxSpeedMS = 50, kMaxAccelerationMS2 = 500;
     o.velocity_m_s = v;
     o.acceleration_m_s2 = a;
-    if (!v.allFinite() || !a.allFinite()) o.position_head_m.setConstant(NAN);
+    if (!v.allFinite() || !a.allFinite() || v.norm() > kMaxSpeedMS ||
+        a.norm() > kMaxAccelerationMS2) {
+      o.position_head_m.setConstant(NAN);
+    }
     o.measured = t.state == ptzstereo::object_track_t::STATE_CONFIRMED;
     return o;
   }

@@ -54,6 +54,7 @@ void Search::start(const Eigen::Vector2d& from, const std::optional<Eigen::Vecto
   index_ = 0;
   active_ = true;
   arrived_s_.reset();
+  last_setpoint_.reset();
   has_last_seen_ = last_seen.has_value();
 }
 
@@ -72,7 +73,10 @@ Eigen::Vector2d Search::direction(double t_s, const Eigen::Vector2d& left_setpoi
   const Eigen::Vector2d w = waypoints_[static_cast<size_t>(index_)];
   Eigen::Vector2d goal = w;
   aim(Side::kLeft, w, &goal.x(), &goal.y());
-  if ((left_setpoint - goal).norm() > 1e-3) return w;
+  // Reached, or as near as the axis limits let the setpoint come (it stopped moving).
+  const bool stuck = last_setpoint_ && (left_setpoint - *last_setpoint_).norm() < 1e-9;
+  last_setpoint_ = left_setpoint;
+  if ((left_setpoint - goal).norm() > 1e-3 && !stuck) return w;
   // Reached: the last seen direction is looked at for dwell_s, a sweep's end passed at once.
   if (index_ == 0 && has_last_seen_) {
     if (!arrived_s_) arrived_s_ = t_s;
@@ -80,6 +84,8 @@ Eigen::Vector2d Search::direction(double t_s, const Eigen::Vector2d& left_setpoi
   }
   const int first_sweep = has_last_seen_ ? 1 : 0;
   ++index_;
+  arrived_s_.reset();
+  last_setpoint_.reset();
   if (index_ >= static_cast<int>(waypoints_.size())) index_ = first_sweep;
   return waypoints_[static_cast<size_t>(index_)];
 }

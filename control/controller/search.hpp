@@ -57,6 +57,7 @@ class Search {
   int index_ = 0;
   bool has_last_seen_ = false;  // waypoint 0 is the last seen direction
   std::optional<double> arrived_s_;
+  std::optional<Eigen::Vector2d> last_setpoint_;
 };
 
 }  // namespace ptz::control

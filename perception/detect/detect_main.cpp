@@ -302,6 +302,7 @@ class DetectNode {
     status_.setCounter("tracks_live", static_cast<int64_t>(tracker_.tracks().size()));
     status_.setCounter("tracks_started", tracker_.tracksStarted());
     status_.setCounter("tracks_recovered", tracker_.recoveries());
+    status_.setCounter("tracks_refused", tracker_.tracksRefused());
     status_.setCounter("target_id", target_id);
     for (const auto& [why, n] : tracker_.untrustedCounts())
       status_.setCounter("untrusted_" + why, n);
@@ -375,7 +376,7 @@ class DetectNode {
                                       last_views_ ? last_views_->second : none, &why);
     if (!ok) return refuseSelect(why);
     status_.countIn(ch_select_, latencyMs(m.utime, received));
-    std::fprintf(stderr, "ptz-detect: target: %s\n", selector_.reason().c_str());
+    log_.warn("selected", "ptz-detect: target: " + selector_.reason());
   }
 
   lcm::LCM* lcm_;

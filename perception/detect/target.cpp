@@ -11,6 +11,8 @@ bool lockable(const Track& t) {
   return t.state != TrackState::kTentative;
 }
 
+constexpr double kPredictionHorizonS = 5.0;  // re-acquisition by prediction, at most this late
+
 std::string describe(const Track& t) {
   return "track " + std::to_string(t.id) + " (" + t.class_name + ")";
 }
@@ -42,6 +44,8 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
     reason_ = "lost track " + std::to_string(locked_id_) + " (" + class_ + ")";
     locked_id_ = -1;
   }
+  // A loss long past says nothing of where the target went.
+  if (lost_ && t_s - lost_->t_s > kPredictionHorizonS) lost_.reset();
   const Track* best = nullptr;
   double best_cost = std::numeric_limits<double>::infinity();
   for (const auto& t : tracks) {
@@ -53,7 +57,7 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
       const double dt = std::clamp(t_s - lost_->t_s, 0.0, 1.0);
       cost = (t.position() - (lost_->position() + dt * lost_->velocity())).norm();
     } else {
-      // The angle from the optical axis at home (+z): what the cameras already look at.
+      // The angle from the optical axis at home (+z).
       const Eigen::Vector3d p = t.position();
       cost = std::atan2(std::hypot(p.x(), p.y()), p.z());
     }
@@ -66,7 +70,7 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
     const bool again = lost_.has_value();
     const int64_t lost_id = again ? lost_->id : -1;
     lock(*best, again ? "by prediction after losing track " + std::to_string(lost_id)
-                      : "by class (nearest the optical axis)");
+                      : "by class (nearest the home optical axis)");
   }
   return locked_id_;
 }

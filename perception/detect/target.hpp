@@ -1,8 +1,8 @@
 // Which track the system follows (no LCM). Once locked it stays on that track while the track
 // exists, whatever else of its class appears; when the track is deleted the selector remembers
-// where it was going and takes the confirmed track of the class nearest that prediction. Without
-// any history it takes the confirmed track of the class nearest the left camera's optical axis
-// (what the cameras already look at), never the largest. Requests (by class, track id or image
+// where it was going and, for 5 s, takes the confirmed track of the class nearest that
+// prediction. Without that it takes the confirmed track of the class nearest the home optical
+// axis (+z of the head frame), never the largest. Requests (by class, track id or image
 // point) change the choice; a request that cannot be met is refused with a reason and changes
 // nothing.
 #pragma once

@@ -109,7 +109,13 @@ Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
   double best_m = INFINITY;
   for (auto& t : tracks_) {
     if (t.state != TrackState::kCoasting || t.class_name != m.class_name) continue;
-    const double reach_m = p_.recover_speed_m_s * (t_s - t.last_update_s);
+    const double since_s = t_s - t.last_update_s;
+    if (since_s > p_.recover_window_s) continue;  // longer: anything could be there
+    if (m.radius_m > 0 && t.radius_m > 0 &&
+        std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio) {
+      continue;
+    }
+    const double reach_m = p_.recover_speed_m_s * since_s;
     const double d = (m.position_m - t.position()).norm();
     if (d <= reach_m && d < best_m) {
       best_m = d;
@@ -144,6 +150,8 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     predict(&t, t_s);
     t.object_index = -1;
   }
+  // The expired go before pairing: a stale track's grown covariance would gate anything.
+  eraseExpired(t_s);
   // Every gated (track, measurement) pair of one class, nearest first, each used once.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
   for (size_t i = 0; i < tracks_.size(); ++i) {
@@ -151,7 +159,14 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       if (tracks_[i].class_name != measurements[j].class_name) continue;
       if (!measurements[j].position_m.allFinite()) continue;
       const double d2 = distance2(tracks_[i], measurements[j]);
-      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2, i, j);
+      // Gated by d2, ranked by the likelihood's cost d2 + ln det S: a coasting track's wide
+      // covariance makes every d2 small, which must not let it take another object's
+      // measurement before that object's own, tighter track.
+      if (d2 <= p_.gate_chi2) {
+        const Eigen::Matrix3d S =
+            tracks_[i].positionCovariance() + measurementCovariance(measurements[j]);
+        pairs.emplace_back(d2 + std::log(std::max(S.determinant(), 1e-300)), i, j);
+      }
     }
   }
   const double frame_dt = std::max(t_s - last_t_s_, 0.0);
@@ -194,17 +209,16 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     } else {
       t.state = updated[i] ? TrackState::kConfirmed : TrackState::kCoasting;
     }
-    if (!updated[i]) t.x.tail<3>() *= std::exp(-frame_dt / p_.coast_accel_decay_s);
+    if (!updated[i]) {
+      // The acceleration fades, and so does its uncertainty (rows and columns of P scaled as
+      // the state is), or the covariance would go on growing as if it did not.
+      const double f = std::exp(-frame_dt / p_.coast_accel_decay_s);
+      t.x.tail<3>() *= f;
+      t.P.bottomRows<3>() *= f;
+      t.P.rightCols<3>() *= f;
+    }
   }
-  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
-                               [&](const Track& t) {
-                                 const double unseen = t_s - t.last_seen_s;
-                                 const double limit = t.state == TrackState::kTentative
-                                                          ? p_.tentative_max_gap_s
-                                                          : p_.coast_s;
-                                 return unseen > limit || !t.x.allFinite() || !t.P.allFinite();
-                               }),
-                tracks_.end());
+  eraseExpired(t_s);
   // Trusted measurements no track took start tentative tracks; untrusted ones are no centre.
   for (size_t j = 0; j < measurements.size(); ++j) {
     const TrackMeasurement& m = measurements[j];
@@ -220,8 +234,24 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       ++recoveries_;
       continue;
     }
+    if (tracks_.size() >= p_.max_tracks) {
+      ++tracks_refused_;
+      continue;
+    }
     start(t_s, m);
   }
+}
+
+void Tracker::eraseExpired(double t_s) {
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& t) {
+                                 const double unseen = t_s - t.last_seen_s;
+                                 const double limit = t.state == TrackState::kTentative
+                                                          ? p_.tentative_max_gap_s
+                                                          : p_.coast_s;
+                                 return unseen > limit || !t.x.allFinite() || !t.P.allFinite();
+                               }),
+                tracks_.end());
 }
 
 }  // namespace ptz::perception

@@ -35,10 +35,13 @@ struct TrackerParams {
   // While a track coasts its acceleration fades with this time constant: an old turn rate is no
   // guide to where a hidden object goes, and extrapolating it quadratically runs away.
   double coast_accel_decay_s = 0.3;
-  // A trusted measurement no gate took, within recover_speed_m_s times the time since the last
-  // update of a coasting track's prediction, restarts that track there (same id, velocity
-  // unknown): an object that turned sharply (a bounce, a reversal) keeps its identity. 0: off.
+  // A trusted measurement no gate took, of the track's radius, within recover_speed_m_s times the
+  // time since the last update (at most recover_window_s ago) of a coasting track's prediction,
+  // restarts that track there (same id, velocity unknown): an object that turned sharply (a
+  // bounce, a reversal) keeps its identity. 0: off.
   double recover_speed_m_s = 1.5;
+  double recover_window_s = 0.5;  // only this soon after the track's last update
+  size_t max_tracks = 64;         // live tracks at most; measurements beyond start none (counted)
 };
 
 enum class TrackState { kTentative, kConfirmed, kCoasting };
@@ -88,6 +91,8 @@ class Tracker {
   const std::map<std::string, int64_t>& untrustedCounts() const { return untrusted_counts_; }
   // Tracks restarted by a measurement outside their gate (sharp turns), since the start.
   int64_t recoveries() const { return recoveries_; }
+  // Measurements that started no track because max_tracks were live, since the start.
+  int64_t tracksRefused() const { return tracks_refused_; }
   int64_t tracksStarted() const { return next_id_ - 1; }
 
  private:
@@ -100,6 +105,7 @@ class Tracker {
   // The coasting track of m's class whose prediction is nearest m within the recovery radius.
   Track* recoverable(double t_s, const TrackMeasurement& m);
   void restart(Track* t, double t_s, const TrackMeasurement& m) const;
+  void eraseExpired(double t_s);
 
   TrackerParams p_;
   std::vector<Track> tracks_;
@@ -108,6 +114,7 @@ class Tracker {
   bool started_ = false;
   std::map<std::string, int64_t> untrusted_counts_;
   int64_t recoveries_ = 0;
+  int64_t tracks_refused_ = 0;
 };
 
 }  // namespace ptz::perception

@@ -210,3 +210,26 @@ TEST(Controller, TrackModeLeadsByTheRateFromTheTracksVelocity) {
   ASSERT_GT(std::abs(rate), 0.3);  // the test means something
   EXPECT_NEAR(sp[0].pan_rad, pan(t) + params.lead_s * rate, 1e-4);
 }
+
+TEST(Search, ALastSeenDirectionBeyondTheLimitsIsPassedOn) {
+  // Lost at the corner of the pan and tilt limits: the aim at that direction lies just beyond
+  // them (the principal point is off the image centre), the clamped setpoint never reaches it,
+  // and the search must go on anyway.
+  const StereoRig rig = StereoRig::makeDefault();
+  control::ControllerParams params;
+  params.coast_s = 0.2;
+  params.limit_wait_s = 0.3;
+  control::Controller c(rig, params);
+  const PtzPose corner{params.limits.axis[0].max_position, params.limits.axis[1].min_position, 1};
+  const double a = 175 * kDeg, e = -40 * kDeg;
+  const Eigen::Vector3d p(3 * std::cos(e) * std::sin(a), -3 * std::sin(e),
+                          3 * std::cos(e) * std::cos(a));
+  std::array<PtzPose, 2> sp{corner, corner};
+  int k = 0;
+  for (; k < 10; ++k) sp = c.update(k * kFrameS, seen(p), sp[0], sp[1]);
+  for (; k < 300 && c.search().waypoint() < 2; ++k) {
+    sp = c.update(k * kFrameS, std::nullopt, sp[0], sp[1]);
+  }
+  EXPECT_EQ(c.state(), ControlState::kSearching);
+  EXPECT_GE(c.search().waypoint(), 2) << "stuck at waypoint " << c.search().waypoint();
+}

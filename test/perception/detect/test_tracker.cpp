@@ -141,6 +141,41 @@ TEST(Tracker, AnObjectThatReversesKeepsItsIdentity) {
   EXPECT_NEAR(only(tracker).position().x(), x(119 * kFrameS), 0.01);
 }
 
+TEST(Tracker, ACoastingTrackDoesNotTakeAnotherObjectsMeasurement) {
+  // Two balls 0.4 m apart; the first is hidden for 1.5 s (its covariance grows), the second goes
+  // on being seen next to where the first was predicted: it stays the second's.
+  TrackerParams params;
+  params.recover_speed_m_s = 0;
+  Tracker tracker(params);
+  int k = 0;
+  for (; k < 30; ++k)
+    tracker.update(k * kFrameS,
+                   {at({0, 0, 3}, "red_ball", 0.005, 0), at({0.4, 0, 3}, "red_ball", 0.005, 1)});
+  for (; k < 75; ++k) tracker.update(k * kFrameS, {at({0.4, 0, 3}, "red_ball", 0.005, 0)});
+  ASSERT_EQ(tracker.tracks().size(), 2u);
+  EXPECT_EQ(tracker.find(1)->state, TrackState::kCoasting);
+  EXPECT_EQ(tracker.find(2)->state, TrackState::kConfirmed);
+  EXPECT_LT((tracker.find(2)->position() - Eigen::Vector3d(0.4, 0, 3)).norm(), 0.01);
+}
+
+TEST(Tracker, ANewObjectLongAfterALossIsANewTrack) {
+  // Recovery only soon after the last update (recover_window_s): a ball appearing 1 s after the
+  // target was hidden, 2 m from its prediction (outside the gate), is somebody else, although
+  // 1.5 m/s times 1 s would reach it.
+  TrackerParams params;
+  params.recover_speed_m_s = 3.0;
+  Tracker tracker(params);
+  int k = 0;
+  for (; k < 30; ++k) tracker.update(k * kFrameS, {at({0, 0, 3})});
+  for (; k < 60; ++k) tracker.update(k * kFrameS, {});
+  // The faded acceleration's uncertainty fades too: 0.35 m after 1 s (without, over 0.5 m).
+  EXPECT_LT(std::sqrt(tracker.find(1)->positionCovariance()(0, 0)), 0.4);
+  tracker.update(k * kFrameS, {at({2.0, 0, 3})});
+  EXPECT_EQ(tracker.tracksStarted(), 2);
+  EXPECT_EQ(tracker.recoveries(), 0);
+  EXPECT_EQ(tracker.find(1)->state, TrackState::kCoasting);
+}
+
 TEST(Tracker, TracksAreDeletedAfterTheirTimes) {
   TrackerParams params;
   params.coast_s = 1.0;
