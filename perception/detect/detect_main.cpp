@@ -157,7 +157,8 @@ class DetectNode {
         ch_select_(channel(p, channels::kTargetSelect)),
         select_freshness_(freshnessFrom(p, "select")),
         tracker_(trackerParams(p)),
-        selector_(target_class_, classNames(detector_.params()), p.getDouble("pick_radius_px")),
+        class_names_(classNames(detector_.params())),
+        selector_(target_class_, class_names_, p.getDouble("pick_radius_px")),
         trusted_area_ratio_(p.getDouble("trusted_area_ratio")) {
     stereo_.max_epipolar_px = p.getDouble("max_epipolar_px");
     stereo_.max_area_ratio = p.getDouble("max_area_ratio");
@@ -245,7 +246,7 @@ class DetectNode {
         rig_.view(Side::kRight, {m->right.pan_rad, m->right.tilt_rad, m->right.zoom});
     const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
     const double t_s = m->utime * 1e-6;
-    tracker_.update(t_s, trackMeasurements(objects, lr, rr, lv, rv, classNames(detector_.params()),
+    tracker_.update(t_s, trackMeasurements(objects, lr, rr, lv, rv, class_names_,
                                            trusted_area_ratio_, tracker_.tracks(), t_s));
     const int64_t target_id = chooseTarget(t_s);
     last_views_ = {lv, rv};
@@ -391,6 +392,7 @@ class DetectNode {
   std::string ch_frame_, ch_detections_, ch_pose_, ch_tracks_, ch_select_;
   FreshnessLimits select_freshness_;
   Tracker tracker_;
+  std::vector<std::string> class_names_;  // the detector's, by class index
   TargetSelector selector_;
   double trusted_area_ratio_;
   std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame

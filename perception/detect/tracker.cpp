@@ -72,13 +72,19 @@ Eigen::Matrix3d Tracker::measurementCovariance(const TrackMeasurement& m) const 
   return R + Eigen::Matrix3d::Identity() * p_.min_position_sigma_m * p_.min_position_sigma_m;
 }
 
-double Tracker::distance2(const Track& t, const TrackMeasurement& m) const {
+double Tracker::distance2(const Track& t, const TrackMeasurement& m, double* log_det) const {
   const Eigen::Matrix3d S = t.positionCovariance() + measurementCovariance(m);
   const Eigen::Vector3d y = m.position_m - t.position();
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
   if (ldlt.info() != Eigen::Success) return INFINITY;
   const double d2 = y.dot(ldlt.solve(y));
+  *log_det = ldlt.vectorD().array().max(1e-300).log().sum();
   return std::isfinite(d2) ? d2 : INFINITY;
+}
+
+bool Tracker::radiusOutOfLine(const Track& t, const TrackMeasurement& m) const {
+  return m.radius_m > 0 && t.radius_m > 0 &&
+         std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio;
 }
 
 void Tracker::correct(Track* t, const TrackMeasurement& m) const {
@@ -111,10 +117,7 @@ Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
     if (t.state != TrackState::kCoasting || t.class_name != m.class_name) continue;
     const double since_s = t_s - t.last_update_s;
     if (since_s > p_.recover_window_s) continue;  // longer: anything could be there
-    if (m.radius_m > 0 && t.radius_m > 0 &&
-        std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio) {
-      continue;
-    }
+    if (radiusOutOfLine(t, m)) continue;
     const double reach_m = p_.recover_speed_m_s * since_s;
     const double d = (m.position_m - t.position()).norm();
     if (d <= reach_m && d < best_m) {
@@ -158,15 +161,12 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     for (size_t j = 0; j < measurements.size(); ++j) {
       if (tracks_[i].class_name != measurements[j].class_name) continue;
       if (!measurements[j].position_m.allFinite()) continue;
-      const double d2 = distance2(tracks_[i], measurements[j]);
+      double log_det = 0;
+      const double d2 = distance2(tracks_[i], measurements[j], &log_det);
       // Gated by d2, ranked by the likelihood's cost d2 + ln det S: a coasting track's wide
       // covariance makes every d2 small, which must not let it take another object's
       // measurement before that object's own, tighter track.
-      if (d2 <= p_.gate_chi2) {
-        const Eigen::Matrix3d S =
-            tracks_[i].positionCovariance() + measurementCovariance(measurements[j]);
-        pairs.emplace_back(d2 + std::log(std::max(S.determinant(), 1e-300)), i, j);
-      }
+      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2 + log_det, i, j);
     }
   }
   const double frame_dt = std::max(t_s - last_t_s_, 0.0);
@@ -181,9 +181,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     const TrackMeasurement& m = measurements[j];
     std::string untrusted = m.untrusted;
     // The radius of a tentative track is still being learnt: its first measurement may be off.
-    if (untrusted.empty() && t.state != TrackState::kTentative && m.radius_m > 0 &&
-        t.radius_m > 0 &&
-        std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio) {
+    if (untrusted.empty() && t.state != TrackState::kTentative && radiusOutOfLine(t, m)) {
       untrusted = "size";
     }
     t.last_seen_s = t_s;

@@ -98,7 +98,9 @@ class Tracker {
  private:
   void predict(Track* t, double t_s) const;
   // Mahalanobis distance^2 of m from t's prediction (t already predicted to m's time).
-  double distance2(const Track& t, const TrackMeasurement& m) const;
+  double distance2(const Track& t, const TrackMeasurement& m, double* log_det) const;
+  // Whether m's radius is off t's by more than max_radius_ratio (both known).
+  bool radiusOutOfLine(const Track& t, const TrackMeasurement& m) const;
   void correct(Track* t, const TrackMeasurement& m) const;
   Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
   void start(double t_s, const TrackMeasurement& m);
