@@ -2,7 +2,8 @@
 // raw and JPEG frames: frame capture -> pose publish and -> setpoint publish latency (median,
 // p99), the simulator's own capture -> frame publish share (its render is the simulated
 // camera's readout), frame publish -> setpoint publish (the processing chain), and frames
-// processed / published.
+// processed / published; each with ptz-detect's windows (perception/detect/windows.hpp) off and
+// on.
 // Run inside a private network namespace (scripts/bench does).
 #include <cstdio>
 #include <map>
@@ -56,7 +57,7 @@ void report(const char* what, const std::vector<double>& v) {
               ptz::percentile(v, 99));
 }
 
-void run(const std::string& encoding) {
+void run(const std::string& encoding, bool windows) {
   lcm::LCM lcm(ptz::test::kTestUrl);
   Listener l;
   lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
@@ -64,7 +65,8 @@ void run(const std::string& encoding) {
   lcm.subscribe("PTZ_SETPOINT", &Listener::onSetpoint, &l);
   lcm.subscribe("PROCESS_STATUS_.*", &Listener::onStatus, &l);
   ptz::test::ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
-                                  PTZ_SOURCE_DIR "/config/detect_default.yaml"});
+                                  PTZ_SOURCE_DIR "/config/detect_default.yaml", "--windows",
+                                  windows ? "true" : "false"});
   ptz::test::ChildProcess control({PTZ_CONTROL_BIN, "--lcm-url", ptz::test::kTestUrl});
   ptz::test::handleUntil(
       lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-control"]["up"]; }, 20s);
@@ -75,7 +77,7 @@ void run(const std::string& encoding) {
       lcm, [&] { return sim.wait(0ms) >= 0; }, 60s);
   ptz::test::drain(lcm, 300ms);
   const int64_t published = l.counters["ptz-sim"]["frames_published"];
-  std::printf("%s frames, 20 s at 30 Hz:\n", encoding.c_str());
+  std::printf("%s frames, windows %s, 20 s at 30 Hz:\n", encoding.c_str(), windows ? "on" : "off");
   report("capture -> setpoint publish (the loop)", l.setpoint_ms);
   report("capture -> OBJECT_POSE publish", l.pose_ms);
   report("capture -> STEREO_FRAME publish (sim, per 0.5 s)", l.frame_publish_ms);
@@ -83,12 +85,18 @@ void run(const std::string& encoding) {
   std::printf("  frames processed / published                  %zu / %lld = %.1f %%\n",
               l.pose_ms.size(), static_cast<long long>(published),
               published ? 100.0 * l.pose_ms.size() / published : 0.0);
+  auto& d = l.counters["ptz-detect"];
+  std::printf("  ptz-detect frames scanned windowed / whole        %lld / %lld\n",
+              static_cast<long long>(d["frames_scanned_windowed"]),
+              static_cast<long long>(d["frames_scanned_full"]));
 }
 
 }  // namespace
 
 int main() {
-  run("raw");
-  run("jpeg");
+  for (const char* encoding : {"raw", "jpeg"}) {
+    run(encoding, false);
+    run(encoding, true);
+  }
   return 0;
 }

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <exception>
 
+#include "common/jpeg_error.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
@@ -98,6 +99,12 @@ constexpr size_t kMinString = 5;
 // covariances, acceleration, radius, age_s, since_update_s (30 doubles); object_index,
 // untrusted_updates; has_orientation; orientation and its covariance (13 doubles).
 constexpr size_t kTrackAfterName = 1 + 30 * 8 + 2 * 4 + 1 + 13 * 8;
+// An object_3d_t after its class_name: position, covariance, radius (13 doubles); left_index,
+// right_index; has_orientation; orientation and its covariance (13 doubles).
+constexpr size_t kObjectAfterName = 13 * 8 + 2 * 4 + 1 + 13 * 8;
+// A sim_object_truth_t after its three strings: position, velocity, radius, orientation,
+// visible fractions.
+constexpr size_t kTruthAfterStrings = 13 * 8;
 
 bool walkImage(Cursor& c, const char* side) {
   int32_t n = 0;
@@ -128,9 +135,9 @@ bool walk(Cursor& c, const ptzstereo::object_detections_t*) {
 bool walk(Cursor& c, const ptzstereo::object_pose_t*) {
   int32_t n = 0;
   if (!c.skip(3 * 8 + 2 * fixedSize<ptzstereo::ptz_head_setpoint_t>() + 4, "header")) return false;
-  if (!c.count(&n, kMinString + 13 * 8 + 2 * 4, "num_objects")) return false;
+  if (!c.count(&n, kMinString + kObjectAfterName, "num_objects")) return false;
   for (int32_t i = 0; i < n; ++i) {
-    if (!c.str("class_name") || !c.skip(13 * 8 + 2 * 4, "objects")) return false;
+    if (!c.str("class_name") || !c.skip(kObjectAfterName, "objects")) return false;
   }
   return true;
 }
@@ -183,11 +190,13 @@ bool walk(Cursor& c, const ptzstereo::sim_truth_t*) {
   int32_t n = 0;
   const size_t heads =
       2 * fixedSize<ptzstereo::ptz_head_state_t>() + 2 * fixedSize<ptzstereo::camera_model_t>();
-  if (!c.skip(3 * 8 + heads, "header") || !c.count(&n, 3 * kMinString + 7 * 8, "num_objects")) {
+  if (!c.skip(3 * 8 + heads, "header") ||
+      !c.count(&n, 3 * kMinString + kTruthAfterStrings, "num_objects")) {
     return false;
   }
   for (int32_t i = 0; i < n; ++i) {
-    if (!c.str("name") || !c.str("class_name") || !c.str("shape") || !c.skip(7 * 8, "objects")) {
+    if (!c.str("name") || !c.str("class_name") || !c.str("shape") ||
+        !c.skip(kTruthAfterStrings, "objects")) {
       return false;
     }
   }
@@ -241,20 +250,6 @@ PTZ_CHECKED_MESSAGE(ptz_state_t)
 PTZ_CHECKED_MESSAGE(sim_truth_t)
 PTZ_CHECKED_MESSAGE(target_select_t)
 #undef PTZ_CHECKED_MESSAGE
-
-namespace {
-struct JpegError {
-  jpeg_error_mgr mgr;
-  std::jmp_buf jump;
-  char text[JMSG_LENGTH_MAX];
-};
-void onJpegError(j_common_ptr info) {
-  auto* err = reinterpret_cast<JpegError*>(info->err);
-  (*info->err->format_message)(info, err->text);
-  std::longjmp(err->jump, 1);
-}
-void ignoreJpegMessage(j_common_ptr, int) {}
-}  // namespace
 
 bool readJpegHeader(const uint8_t* data, size_t size, JpegHeader* header, std::string* why) {
   // The start-of-image marker and a marker after it: OpenCV picks its decoder from the bytes, and

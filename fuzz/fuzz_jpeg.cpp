@@ -2,12 +2,19 @@
 // height and pixel format taken from the input. Input: pixel_format (1 byte), width and height
 // (2 bytes each, big-endian), then the JPEG data. Properties: the header is read with little
 // memory and gives a plausible size; decodeImage refuses what checkImage refuses and otherwise
-// gives exactly the size and channels the message says.
+// gives exactly the size and channels the message says. Then ptz-detect's window decode
+// (decodeJpegWindow, libjpeg-turbo's crop and skip) of the whole image and of a part: it refuses
+// a header that does not say the message's size in colour, and otherwise gives the part's size in
+// BGR. (Its pixels equal a full decode's for valid JPEGs, test_windows.cpp; of damaged data
+// cv::imdecode may give zeros where libjpeg fills in, so that is no property here.)
 #include <opencv2/core.hpp>
+
+#include <algorithm>
 
 #include "common/message_check.hpp"
 #include "common/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "perception/detect/jpeg_window.hpp"
 
 namespace {
 constexpr size_t kPrefix = 5;
@@ -51,6 +58,30 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   cv::Mat image;
   const bool decoded = ptz::decodeImage(msg, &image, &why);
+  if (msg.width > 0 && msg.height > 0 && int64_t{msg.width} * msg.height <= kMaxDecodedPixels) {
+    const bool colour = header_ok && header.channels == 3;
+    const bool same_size = header_ok && header.width == msg.width && header.height == msg.height;
+    const cv::Rect whole(0, 0, msg.width, msg.height);
+    const cv::Rect part(msg.width / 3, msg.height / 3, std::max(1, msg.width / 3),
+                        std::max(1, msg.height / 3));
+    for (const cv::Rect& r : {whole, part}) {
+      cv::Mat window;
+      std::string window_why;
+      const bool ok = ptz::perception::decodeJpegWindow(msg.data.data(), msg.data.size(), msg.width,
+                                                        msg.height, r, &window, &window_why);
+      if (!(colour && same_size)) {
+        FUZZ_CHECK(!ok, "decodeJpegWindow took a JPEG whose header is not the message's in colour");
+        continue;
+      }
+      if (!ok) {
+        FUZZ_CHECK(!window_why.empty(), "a refused window without a reason");
+        continue;
+      }
+      FUZZ_CHECK(window.size() == r.size() && window.type() == CV_8UC3,
+                 "a window of " + std::to_string(window.cols) + "x" + std::to_string(window.rows) +
+                     " for " + std::to_string(r.width) + "x" + std::to_string(r.height));
+    }
+  }
   if (!image_ok) {
     FUZZ_CHECK(!decoded, "decodeImage took an image checkImage refused");
     return 0;

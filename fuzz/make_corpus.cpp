@@ -166,6 +166,10 @@ void messages() {
   o.radius_m = 0.1;
   p.objects = {o, o};
   p.objects[1].class_name = "green_box";
+  p.objects[1].has_orientation = true;
+  p.objects[1].orientation_wxyz[0] = std::cos(0.25);
+  p.objects[1].orientation_wxyz[2] = std::sin(0.25);
+  p.objects[1].orientation_covariance_rad2[4] = 0.001;
   p.num_objects = 2;
   write("fuzz_object_pose", "two_objects", encode(p));
   // The 10 000 000 objects in a small message.
@@ -324,10 +328,13 @@ void messages() {
   tr.left_camera.rotation_head_camera[0] = tr.left_camera.rotation_head_camera[4] = 1;
   tr.left_camera.rotation_head_camera[8] = 1;
   tr.right_camera = tr.left_camera;
-  sim_object_truth_t ot{"ball", "red_ball", "sphere", {0.1, 0.2, 3}, {0.3, 0, 0}, 0.1};
+  sim_object_truth_t ot{"ball",      "red_ball", "sphere",     {0.1, 0.2, 3},
+                        {0.3, 0, 0}, 0.1,        {1, 0, 0, 0}, {1, 0.5}};
   tr.objects = {ot, ot};
   tr.objects[1].name = "box";
   tr.objects[1].shape = "box";
+  tr.objects[1].orientation_wxyz[0] = std::cos(0.25);
+  tr.objects[1].orientation_wxyz[2] = std::sin(0.25);
   tr.num_objects = 2;
   write("fuzz_sim_truth", "two_objects", encode(tr));
 }

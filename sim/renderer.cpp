@@ -156,7 +156,8 @@ const cv::Mat& Renderer::rays(const CameraView& view) {
   return caches_.back().rays;
 }
 
-void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr) {
+void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
+                      std::vector<double>* visible_fraction) {
   const cv::Mat& ray_map = rays(view);
   // Background: per pixel, where its ray meets the floor or the backdrop, as fixed-point
   // coordinates into the texture atlas (OpenCV's remap format: integer texel plus a 1/32 texel
@@ -213,24 +214,44 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr) {
   cv::remap(atlas_, *bgr, map_xy_, map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
             cv::Scalar(200, 190, 180));
   if (scene_.chessboard.present) drawChessboard(view, ray_map, bgr, &depth_);
-  for (const auto& object : scene_.objects) drawObject(object, t_s, view, ray_map, bgr, &depth_);
+  owner_.create(view.height, view.width, CV_32S);
+  owner_.setTo(-1);
+  std::vector<int64_t> footprint(scene_.objects.size());
+  for (size_t i = 0; i < scene_.objects.size(); ++i) {
+    footprint[i] =
+        drawObject(scene_.objects[i], static_cast<int32_t>(i), t_s, view, ray_map, bgr, &depth_);
+  }
+  if (!visible_fraction) return;
+  std::vector<int64_t> shown(scene_.objects.size());
+  for (int v = 0; v < owner_.rows; ++v) {
+    const int32_t* row = owner_.ptr<int32_t>(v);
+    for (int u = 0; u < owner_.cols; ++u) {
+      if (row[u] >= 0) ++shown[static_cast<size_t>(row[u])];
+    }
+  }
+  visible_fraction->assign(scene_.objects.size(), 0.0);
+  for (size_t i = 0; i < footprint.size(); ++i) {
+    if (footprint[i] > 0) (*visible_fraction)[i] = static_cast<double>(shown[i]) / footprint[i];
+  }
 }
 
-void Renderer::drawObject(const SceneObject& object, double t_s, const CameraView& view,
-                          const cv::Mat& ray_map, cv::Mat* bgr, cv::Mat* depth) {
+int64_t Renderer::drawObject(const SceneObject& object, int32_t index, double t_s,
+                             const CameraView& view, const cv::Mat& ray_map, cv::Mat* bgr,
+                             cv::Mat* depth) {
   const Eigen::Vector3d centre = object.trajectory.position(t_s);
   const cv::Rect rect = boundingRect(view, centre, object.boundingRadius());
-  if (rect.empty()) return;
+  if (rect.empty()) return 0;
+  int64_t footprint = 0;
   const Eigen::Matrix3d& R = view.rotation_head_camera;
   const Eigen::Vector3d C = view.position_head_m;
   const Eigen::Vector3d oc = C - centre;
-  const Eigen::Matrix3d box_to_head =
-      Eigen::AngleAxisd(object.yaw_rad, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d box_to_head = object.rotationHeadObject(t_s);
   const Eigen::Vector3d oc_box = box_to_head.transpose() * oc;
   for (int v = rect.y; v < rect.y + rect.height; ++v) {
     const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
     cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
     float* out_depth = depth->ptr<float>(v);
+    int32_t* out_owner = owner_.ptr<int32_t>(v);
     for (int u = rect.x; u < rect.x + rect.width; ++u) {
       const Eigen::Vector3d d = R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1.0);
       double t = -1;
@@ -270,8 +291,11 @@ void Renderer::drawObject(const SceneObject& object, double t_s, const CameraVie
         const Eigen::Vector3d p_box = oc_box + t * db;
         surface_m = {p_box[(axis + 1) % 3], p_box[(axis + 2) % 3]};
       }
-      if (t <= 0 || t >= out_depth[u]) continue;
+      if (t <= 0) continue;
+      ++footprint;
+      if (t >= out_depth[u]) continue;
       out_depth[u] = static_cast<float>(t);
+      out_owner[u] = index;
       out[u] = shade(object.color_bgr, normal);
       if (object.textured) {
         // Four times finer than the backdrop: objects are small, and the texture's coarse
@@ -282,6 +306,7 @@ void Renderer::drawObject(const SceneObject& object, double t_s, const CameraVie
       }
     }
   }
+  return footprint;
 }
 
 void Renderer::drawChessboard(const CameraView& view, const cv::Mat& ray_map, cv::Mat* bgr,

@@ -15,8 +15,11 @@ class Renderer {
  public:
   explicit Renderer(const Scene& scene);
 
-  // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise).
-  void render(const CameraView& view, double t_s, cv::Mat* bgr);
+  // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise). With
+  // visible_fraction: each scene object's share of its pixels in the image that no nearer
+  // object (or the chessboard) hides; 0 where it has none in the image.
+  void render(const CameraView& view, double t_s, cv::Mat* bgr,
+              std::vector<double>* visible_fraction = nullptr);
 
   // Per-pixel undistorted normalised coordinates (x/z, y/z) of a view's pixels (CV_32FC2).
   const cv::Mat& rays(const CameraView& view);
@@ -27,13 +30,16 @@ class Renderer {
     Intrinsics intrinsics;
     cv::Mat rays;
   };
-  void drawObject(const SceneObject& object, double t_s, const CameraView& view,
-                  const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
+  // Returns the pixels where the object's surface is in front of the camera (hidden or not);
+  // where it is the nearest, owner_ becomes its index.
+  int64_t drawObject(const SceneObject& object, int32_t index, double t_s, const CameraView& view,
+                     const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
   void drawChessboard(const CameraView& view, const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
 
   const Scene& scene_;
   cv::Mat atlas_;                      // backdrop and floor textures, BGR8
   cv::Mat map_xy_, map_frac_, depth_;  // per-frame scratch, kept to avoid reallocation
+  cv::Mat owner_;                      // CV_32S: the object each pixel shows (-1: none)
   std::vector<RayCache> caches_;
 };
 

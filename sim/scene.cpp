@@ -68,6 +68,14 @@ double SceneObject::boundingRadius() const {
   return shape == Shape::kSphere ? radius_m : half_extents_m.norm();
 }
 
+double SceneObject::yaw(double t_s) const {
+  return shape == Shape::kBox ? yaw_rad + yaw_rate_rad_s * t_s : 0.0;
+}
+
+Eigen::Matrix3d SceneObject::rotationHeadObject(double t_s) const {
+  return Eigen::AngleAxisd(yaw(t_s), Eigen::Vector3d::UnitY()).toRotationMatrix();
+}
+
 std::vector<Eigen::Vector3d> Chessboard::innerCorners() const {
   std::vector<Eigen::Vector3d> corners;
   for (int r = 0; r < inner_rows; ++r) {
@@ -108,7 +116,7 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   if (shape == "sphere") {
     known.push_back("radius_m");
   } else if (shape == "box") {
-    known.insert(known.end(), {"half_extents_m", "yaw_rad"});
+    known.insert(known.end(), {"half_extents_m", "yaw_rad", "yaw_rate_rad_s"});
   } else {
     throw ConfigError(fieldPath(w, "shape") + ": must be sphere or box, got '" + shape + "'");
   }
@@ -125,6 +133,7 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
       throw ConfigError(w + ": missing field 'half_extents_m'");
     }
     o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0);
+    o.yaw_rate_rad_s = readDouble(n, "yaw_rate_rad_s", w, 0.0, Range::between(-20, 20));
   }
   const auto bgr = readNumbers(n, "color_bgr", 3, w, Range::between(0, 255));
   for (int k = 0; k < 3; ++k) o.color_bgr[k] = static_cast<uchar>(bgr[k]);

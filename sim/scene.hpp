@@ -38,6 +38,7 @@ struct SceneObject {
   double radius_m = 0.1;                                     // sphere
   Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box
   double yaw_rad = 0.0;                                      // box, about the head's y axis
+  double yaw_rate_rad_s = 0.0;                               // box: its yaw turns at this rate
   cv::Vec3b color_bgr{0, 0, 220};
   // The colour modulated by the backdrop's texture on the surface: gives dense stereo something
   // to match (plain objects only shade smoothly).
@@ -45,6 +46,10 @@ struct SceneObject {
   Trajectory trajectory;
 
   double boundingRadius() const;
+  // A box's yaw at t_s (yaw_rad + yaw_rate_rad_s t_s), 0 for a sphere; and the rotation
+  // head <- object it makes about the head's y axis (identity for a sphere).
+  double yaw(double t_s) const;
+  Eigen::Matrix3d rotationHeadObject(double t_s) const;
 };
 
 struct Chessboard {

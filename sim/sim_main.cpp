@@ -50,14 +50,15 @@ void declare(Params& p) {
                "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
                "texture_seed (7)");
   p.addSection("objects",
-               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, color_bgr, "
+               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, yaw_rad and "
+               "yaw_rate_rad_s (box, about the head's y axis), color_bgr, "
                "textured (0; 1: the colour modulated by the surface texture, for dense stereo), "
                "trajectory: static|line|circle|figure_eight|random_walk|arc, centre_m, "
                "amplitude_m, period_s, phase_rad, seed, arc_rad}");
   p.addSection("chessboard", "{inner_cols, inner_rows, square_m, centre_m, rotation_vector}");
   p.addSection("scenario",
                "read by the scenario runner (test/scenarios/README.md), not by ptz-sim: "
-               "{description, detect_args, control_args, checks}");
+               "{description, target_class, sim_args, detect_args, control_args, checks}");
 }
 
 class SimNode {
@@ -223,6 +224,7 @@ class SimNode {
       truth = makeTruthMessage(*sim_, frame, simUtime(frame.t_s));
     }
     sim_->render(&frame);
+    setVisibility(frame, &truth);
     current_frame_t_ = frame.t_s;
     const int64_t utime = simUtime(frame.t_s);
     ptzstereo::stereo_frame_t msg =

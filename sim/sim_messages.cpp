@@ -72,10 +72,25 @@ ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& fr
       t.velocity_m_s[k] = v[k];
     }
     t.radius_m = o.shape == SceneObject::Shape::kSphere ? o.radius_m : o.half_extents_m.maxCoeff();
+    const Eigen::Quaterniond q(o.rotationHeadObject(frame.t_s));
+    t.orientation_wxyz[0] = q.w();
+    t.orientation_wxyz[1] = q.x();
+    t.orientation_wxyz[2] = q.y();
+    t.orientation_wxyz[3] = q.z();
     msg.objects.push_back(t);
   }
   msg.num_objects = static_cast<int32_t>(msg.objects.size());
+  setVisibility(frame, &msg);
   return msg;
+}
+
+void setVisibility(const SimFrame& rendered, ptzstereo::sim_truth_t* truth) {
+  for (size_t camera = 0; camera < 2; ++camera) {
+    const std::vector<double>& fraction = rendered.visible_fraction[camera];
+    for (size_t i = 0; i < truth->objects.size(); ++i) {
+      truth->objects[i].visible_fraction[camera] = i < fraction.size() ? fraction[i] : 0.0;
+    }
+  }
 }
 
 }  // namespace ptz::sim

@@ -11,6 +11,9 @@ namespace ptz::sim {
 ptzstereo::ptz_state_t makeStateMessage(const PtzPlant& plant, int64_t utime);
 ptzstereo::stereo_frame_t makeFrameMessage(const SimFrame& frame, int64_t utime, int8_t encoding,
                                            int jpeg_quality);
+// The objects' visible fractions come from the frame's render: made before it (at the instant
+// of capture), the message gets them from setVisibility once the frame is rendered.
 ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& frame, int64_t utime);
+void setVisibility(const SimFrame& rendered, ptzstereo::sim_truth_t* truth);
 
 }  // namespace ptz::sim

@@ -36,7 +36,8 @@ void Simulator::render(SimFrame* frame) {
     for (int camera = range.start; camera < range.end; ++camera) {
       cv::Mat* image = camera == 0 ? &f.left : &f.right;
       (camera == 0 ? left_renderer_ : right_renderer_)
-          .render(camera == 0 ? left : right, f.t_s, image);
+          .render(camera == 0 ? left : right, f.t_s, image,
+                  &f.visible_fraction[static_cast<size_t>(camera)]);
       noise_.apply(static_cast<uint64_t>(f.index), camera, image);
     }
   });

@@ -3,8 +3,10 @@
 
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "common/plant.hpp"
 #include "common/rig.hpp"
@@ -18,6 +20,9 @@ struct SimFrame {
   double t_s = 0;
   cv::Mat left, right;  // BGR8
   PtzPose left_pose, right_pose;
+  // Per camera (left, right), per scene object: its share of its pixels in the image that no
+  // nearer object hides (Renderer::render); empty until rendered.
+  std::array<std::vector<double>, 2> visible_fraction;
 };
 
 class Simulator {

@@ -32,7 +32,10 @@ void declare(Params& p) {
   p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target",
         Range::above(0));
   p.add("max_zoom", d.max_zoom, "ratio", "highest zoom the controller asks for", Range::above(0));
-  p.add("lead_s", d.lead_s, "s", "feed-forward horizon of the track mode", Range::atLeast(0));
+  p.add("lead_s", d.lead_s, "s",
+        "track: feed-forward horizon, the motor's time constant T plus the capture -> command "
+        "delay (lockstep: ~0 + half a frame; on a real rig: T + delay_us_p50 of the status)",
+        Range::atLeast(0));
   p.add("rate_filter_s", d.rate_filter_s, "s", "time constant of the angular rate estimate",
         Range::above(0));
   p.add("max_setpoint_rate", d.max_setpoint_rate, "rad/s", "setpoint slew limit (zoom: ratio/s)",
@@ -77,9 +80,15 @@ void declare(Params& p) {
         "smith: delay from capture to the command (delay_us_p50 of the status) added to "
         "dead_time_s",
         Range::atLeast(0));
+  p.add("kf_model", d.kf_model.c_str(),
+        "smith: the target filter, ct (coordinated turn: predicts along curves) or cv (constant "
+        "velocity)");
   p.add("kf_accel_psd_m2_s3", d.kalman.accel_psd_m2_s3, "m^2/s^3",
-        "smith: spectral density of the target's acceleration (Kalman process noise)",
+        "smith: spectral density of the target's acceleration (Kalman process noise; ct: of its "
+        "changes of speed and turn beyond the model)",
         Range::above(0));
+  p.add("kf_turn_psd_rad2_s3", d.turn_kalman.turn_psd_rad2_s3, "rad^2/s^3",
+        "smith, ct: spectral density of the change of the target's turn rate", Range::above(0));
   p.add("kf_position_sigma_m", d.kf_position_sigma_m, "m",
         "smith: position noise of a pose that carries no covariance", Range::above(0));
   p.add("kf_gate_chi2", d.kalman.gate_chi2, "",
@@ -124,13 +133,18 @@ ControllerParams controllerParams(const Params& p) {
   c.search.rate_rad_s = p.getDouble("search_rate_rad_s");
   c.smith_filter_s = p.getDouble("smith_filter_s");
   c.smith_extra_delay_s = p.getDouble("smith_extra_delay_s");
+  c.kf_model = p.getString("kf_model");
   c.kalman.accel_psd_m2_s3 = p.getDouble("kf_accel_psd_m2_s3");
+  c.turn_kalman.accel_psd_m2_s3 = c.kalman.accel_psd_m2_s3;
+  c.turn_kalman.turn_psd_rad2_s3 = p.getDouble("kf_turn_psd_rad2_s3");
   c.kf_position_sigma_m = p.getDouble("kf_position_sigma_m");
   c.kalman.gate_chi2 = p.getDouble("kf_gate_chi2");
+  c.turn_kalman.gate_chi2 = c.kalman.gate_chi2;
   // The numbers' ranges are their declarations'.
   if (c.mode != "track" && c.mode != "paper" && c.mode != "smith") {
     throw p.invalid("mode", "must be track, paper or smith");
   }
+  if (c.kf_model != "ct" && c.kf_model != "cv") throw p.invalid("kf_model", "must be ct or cv");
   if (c.zoom_mode != "size" && c.zoom_mode != "hold") {
     throw p.invalid("zoom_mode", "must be size or hold");
   }
@@ -196,6 +210,7 @@ std::optional<Observation> targetOf(const ptzstereo::object_tracks_t& m, std::st
       o.position_head_m.setConstant(NAN);
     }
     o.measured = t.state == ptzstereo::object_track_t::STATE_CONFIRMED;
+    o.track_id = t.id;
     return o;
   }
   *problem = "target_not_in_tracks";

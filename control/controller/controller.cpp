@@ -50,6 +50,7 @@ Controller::Controller(StereoRig rig, ControllerParams params)
       p_(std::move(params)),
       search_(rig_, p_.search),
       kalman_(p_.kalman),
+      turn_kalman_(p_.turn_kalman),
       smith_(makeSmith(p_)) {}
 
 void Controller::setState(ControlState s, std::string reason) {
@@ -135,10 +136,34 @@ PtzPose Controller::desired(Side side, const Observation& o, const PtzPose& at_c
 
 void Controller::observe(double t_s, const Observation& o) {
   Eigen::Matrix3d cov = o.covariance_m2;
-  if (!cov.allFinite() || !(cov.trace() > 0)) {
+  if (!usableCovariance(cov)) {  // unknown (zero), or not a covariance at all
     cov = Eigen::Matrix3d::Identity() * p_.kf_position_sigma_m * p_.kf_position_sigma_m;
   }
-  if (!kalman_.update(t_s, o.position_head_m, cov)) ++outliers_rejected_;
+  const bool accepted = p_.kf_model == "ct" ? turn_kalman_.update(t_s, o.position_head_m, cov)
+                                            : kalman_.update(t_s, o.position_head_m, cov);
+  if (!accepted) ++outliers_rejected_;
+}
+
+bool Controller::targetFilterStarted() const {
+  return p_.kf_model == "ct" ? turn_kalman_.initialised() : kalman_.initialised();
+}
+
+Eigen::Vector3d Controller::predictedAt(double t_s) const {
+  return p_.kf_model == "ct" ? turn_kalman_.positionAt(t_s) : kalman_.positionAt(t_s);
+}
+
+void Controller::resetTargetFilter() {
+  kalman_.reset();
+  turn_kalman_.reset();
+}
+
+void Controller::follows(int64_t track_id) {
+  if (followed_id_ && *followed_id_ != track_id) {
+    resetTargetFilter();
+    tracking_ = false;  // the track mode's rate estimate restarts from the new target
+    rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
+  }
+  followed_id_ = track_id;
 }
 
 PtzPose Controller::desiredSmith(Side side, const Observation& o, const PtzPose& at_capture,
@@ -149,7 +174,7 @@ PtzPose Controller::desiredSmith(Side side, const Observation& o, const PtzPose&
   // Where the target will be while the command issued now acts (mid-frame after the delay).
   const double t_act = t_s + pan_axis.delayS() + (dt > 0 ? dt : 1.0 / 30) / 2;
   Observation ahead = o;
-  ahead.position_head_m = kalman_.positionAt(t_act);
+  ahead.position_head_m = predictedAt(t_act);
   PtzPose goal = setpoint_[i];
   goal.zoom = zoomFor(side, ahead, at_capture);
   const Eigen::Vector2d centre = imageCentre(rig_.camera(side));
@@ -157,15 +182,17 @@ PtzPose Controller::desiredSmith(Side side, const Observation& o, const PtzPose&
   if (!aimAt(rig_, side, ahead.position_head_m, goal.zoom, centre, &pan, &tilt)) {
     return setpoint_[i];
   }
-  // The reference's rate from the filter's velocity, through the same inverse kinematics.
-  constexpr double kRateStepS = 0.1;
-  double pan_before = pan, tilt_before = tilt;
-  aimAt(rig_, side, kalman_.positionAt(t_act - kRateStepS), goal.zoom, centre, &pan_before,
-        &tilt_before);
-  goal.pan_rad =
-      pan_axis.command(t_s, pan, (pan - pan_before) / kRateStepS, at_capture.pan_rad, t_s);
-  goal.tilt_rad =
-      tilt_axis.command(t_s, tilt, (tilt - tilt_before) / kRateStepS, at_capture.tilt_rad, t_s);
+  // The reference's rate at t_act through the same inverse kinematics: a central difference
+  // (a one-sided one lags by half its step, which a turning prediction would show).
+  constexpr double kRateStepS = 0.05;
+  double pan_a = pan, tilt_a = tilt, pan_b = pan, tilt_b = tilt;
+  const bool rate_ok =
+      aimAt(rig_, side, predictedAt(t_act + kRateStepS), goal.zoom, centre, &pan_a, &tilt_a) &&
+      aimAt(rig_, side, predictedAt(t_act - kRateStepS), goal.zoom, centre, &pan_b, &tilt_b);
+  const double pan_rate = rate_ok ? (pan_a - pan_b) / (2 * kRateStepS) : 0;
+  const double tilt_rate = rate_ok ? (tilt_a - tilt_b) / (2 * kRateStepS) : 0;
+  goal.pan_rad = pan_axis.command(t_s, pan, pan_rate, at_capture.pan_rad, t_s);
+  goal.tilt_rad = tilt_axis.command(t_s, tilt, tilt_rate, at_capture.tilt_rad, t_s);
   return goal;
 }
 
@@ -207,7 +234,9 @@ std::array<PtzPose, 2> Controller::follow(double t_s, const Observation& o,
                                           const PtzPose& left_at_capture,
                                           const PtzPose& right_at_capture, double dt) {
   if (p_.mode == "smith") {
-    if (o.measured) observe(t_s, o);
+    // A coasting track's prediction starts a filter that has nothing (a new target that is
+    // hidden): never predict from another target's state.
+    if (o.measured || !targetFilterStarted()) observe(t_s, o);
     return {desiredSmith(Side::kLeft, o, left_at_capture, t_s, dt),
             desiredSmith(Side::kRight, o, right_at_capture, t_s, dt)};
   }
@@ -224,7 +253,7 @@ void Controller::lost(double t_s, double dt) {
     return;
   }
   if (p_.lost_mode == "home") {
-    kalman_.reset();
+    resetTargetFilter();
     setState(ControlState::kHoming, "no target: returning home");
     slewTowards({PtzPose{0, 0, 1}, PtzPose{0, 0, 1}}, dt, p_.home_rate, p_.home_rate);
     return;
@@ -233,7 +262,7 @@ void Controller::lost(double t_s, double dt) {
     setState(ControlState::kHolding, "target lost beyond an axis limit: waiting there");
     return;
   }
-  kalman_.reset();
+  resetTargetFilter();
   const Eigen::Vector2d from(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
   if (!search_.active()) search_.start(from, last_seen_direction_);
   const Eigen::Vector2d dir = search_.direction(t_s, from);
@@ -261,7 +290,8 @@ std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observ
     lost_at_limit_ = false;
     tracking_ = false;
     rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
-    kalman_.reset();
+    resetTargetFilter();
+    followed_id_.reset();
     smith_ = makeSmith(p_);
     search_.stop();
   }
@@ -275,6 +305,7 @@ std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observ
   const bool coasting = usable && !target->measured;
   const double since_seen = last_seen_t_s_ ? t_s - *last_seen_t_s_ : INFINITY;
   if (usable && (!coasting || since_seen <= p_.coast_s)) {
+    follows(target->track_id);
     const std::array<PtzPose, 2> goal = follow(t_s, *target, left_at_capture, right_at_capture, dt);
     const bool at_limit = beyondLimits(goal);
     if (coasting) {

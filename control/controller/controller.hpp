@@ -15,10 +15,14 @@
 // - "paper": exactly the paper's loop, a P element on the angular error measured in the image
 //   at capture: u = paper_gain * (theta* - theta_capture). With the PT1 axis this is the open
 //   loop 1.7 / (1 + 0.24 s) e^(-s tau) with unity feedback (steady-state error 1 / (1 + 1.7)).
-// - "smith": for loops with a long delay. A constant-velocity Kalman filter on the 3D position
-//   predicts where the target will be when a command issued now acts (after the model's dead
-//   time), and a Smith predictor per pan/tilt axis (smith.hpp) steers the plant model's
-//   delay-free output onto that prediction, corrected by the measured angle at capture.
+// - "smith": for loops with a long delay. A Kalman filter on the 3D position (kf_model: constant
+//   velocity, kalman.hpp, or coordinated turn, turn_kalman.hpp) predicts where the target will
+//   be when a command issued now acts (after the model's dead time), and a Smith predictor per
+//   pan/tilt axis (smith.hpp) steers the plant model's delay-free output onto that prediction,
+//   corrected by the measured angle at capture.
+//
+// A change of the followed track's id starts the target filters afresh (the smith mode's Kalman
+// filter, the track mode's filtered rate): a jump to a new target is no outlier of the old one.
 //
 // Every mode: setpoints slew at most max_setpoint_rate and stay within the limits. Through a loss
 // of the target track (it coasts on its prediction) the heads follow the prediction for coast_s
@@ -40,6 +44,7 @@
 #include "control/controller/kalman.hpp"
 #include "control/controller/search.hpp"
 #include "control/controller/smith.hpp"
+#include "control/controller/turn_kalman.hpp"
 
 namespace ptz::control {
 
@@ -49,7 +54,9 @@ struct ControllerParams {
   std::string zoom_mode = "size";  // "size" (keep target_radius_px) or "hold"
   double target_radius_px = 30.0;
   double max_zoom = 4.0;
-  double lead_s = 0.3;             // feed-forward horizon (track)
+  // Feed-forward horizon (track): the motor's time constant T plus the capture -> command
+  // delay; in lockstep that delay is ~0 plus half a frame of sample-and-hold.
+  double lead_s = 0.25;
   double rate_filter_s = 0.25;     // time constant Tv of the rate estimate (track)
   double max_setpoint_rate = 3.0;  // rad/s for pan and tilt; zoom ratio/s for zoom
   double lost_hold_s = 0.5;
@@ -65,7 +72,9 @@ struct ControllerParams {
   double smith_filter_s = 0.1;        // time constant of the Smith predictor's model-error filter
   double smith_extra_delay_s = 0.0;   // added to the model's dead time (capture -> command)
   double kf_position_sigma_m = 0.01;  // when a pose has no covariance
+  std::string kf_model = "ct";        // smith: "cv" (constant velocity) or "ct" (coordinated turn)
   KalmanParams kalman;
+  TurnKalmanParams turn_kalman;
 };
 
 // The target in one frame: what ptz-detect measured, or its track's prediction.
@@ -82,7 +91,8 @@ struct Observation {
   // rate from the velocity (no filter lag on curves); without them, the filtered angular rate.
   std::optional<Eigen::Vector3d> velocity_m_s;
   Eigen::Vector3d acceleration_m_s2 = Eigen::Vector3d::Zero();
-  bool measured = true;  // false: the track coasts, this is its prediction
+  bool measured = true;   // false: the track coasts, this is its prediction
+  int64_t track_id = -1;  // the followed track's id (-1: unknown); a change resets the filters
 };
 
 enum class ControlState { kTracking, kCoasting, kSearching, kHolding, kHoming };
@@ -117,6 +127,12 @@ class Controller {
   PtzPose desiredSmith(Side side, const Observation& o, const PtzPose& at_capture, double t_s,
                        double dt);
   void observe(double t_s, const Observation& o);
+  // The smith mode's target filter (kf_model): its prediction, its reset.
+  Eigen::Vector3d predictedAt(double t_s) const;
+  bool targetFilterStarted() const;
+  void resetTargetFilter();
+  // A new followed track id: the target filters start afresh.
+  void follows(int64_t track_id);
   double zoomFor(Side side, const Observation& o, const PtzPose& at_capture) const;
   void smithSent(double t_s, const PtzPose& left_at_capture, const PtzPose& right_at_capture);
   void slewTowards(const std::array<PtzPose, 2>& goal, double dt, double rate_angle,
@@ -144,6 +160,8 @@ class Controller {
   double since_target_s_ = 0;
   Search search_;
   ConstantVelocityKalman kalman_;
+  TurnKalman turn_kalman_;
+  std::optional<int64_t> followed_id_;
   int64_t outliers_rejected_ = 0;
   std::array<SmithPredictor, 4> smith_;  // left pan, left tilt, right pan, right tilt
 };

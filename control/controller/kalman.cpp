@@ -42,21 +42,11 @@ bool ConstantVelocityKalman::update(double t_s, const Eigen::Vector3d& position_
     return true;
   }
   predictTo(t_s);
-  const Eigen::Vector3d innovation = position_m - x_.head<3>();
-  const Eigen::Matrix3d S = P_.topLeftCorner<3, 3>() + covariance_m2;
-  const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
-  if (innovation.dot(S_ldlt.solve(innovation)) > p_.gate_chi2) {
+  if (!updatePosition(&x_, &P_, position_m, covariance_m2, p_.gate_chi2)) {
     if (++rejects_in_row_ >= p_.reset_after_rejects) start(t_s, position_m, covariance_m2);
     return false;
   }
   rejects_in_row_ = 0;
-  // K = P H^T S^-1 with H = [I 0].
-  const Eigen::Matrix<double, 6, 3> K = S_ldlt.solve(P_.leftCols<3>().transpose()).transpose();
-  x_ += K * innovation;
-  Matrix6d IKH = Matrix6d::Identity();
-  IKH.leftCols<3>() -= K;
-  // Joseph form: stays symmetric and positive definite over hours of updates.
-  P_ = IKH * P_ * IKH.transpose() + K * covariance_m2 * K.transpose();
   return true;
 }
 

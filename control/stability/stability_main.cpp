@@ -202,10 +202,11 @@ int main(int argc, char** argv) {
         "the plant is motor_gain / (1 + T s) e^(-s tau)");
   p.add("motor_gain", 1.0, "", "smith: the motor's own gain (without the paper's P element)",
         ptz::Range::above(0));
-  p.add("lead_s", 0.3, "s", "track: the feed-forward horizon of ptz-control's track mode",
-        ptz::Range::atLeast(0));
-  p.add("rate_filter_s", 0.25, "s", "track: the time constant of its rate estimate",
-        ptz::Range::above(0));
+  const control::TrackLoopParams track_default;
+  p.add("lead_s", track_default.lead_s, "s",
+        "track: the feed-forward horizon of ptz-control's track mode", ptz::Range::atLeast(0));
+  p.add("rate_filter_s", track_default.rate_filter_s, "s",
+        "track: the time constant of its rate estimate", ptz::Range::above(0));
   try {
     if (!p.parse(argc, argv)) return 0;
     control::LoopParams loop{p.getDouble("gain"), p.getDouble("time_constant_s"),

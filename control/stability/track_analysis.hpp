@@ -14,7 +14,7 @@ namespace ptz::control {
 
 struct TrackLoopParams {
   double time_constant_s = 0.24;  // T of the motor (gain 1)
-  double lead_s = 0.3;            // the track mode's feed-forward horizon
+  double lead_s = 0.25;           // the track mode's feed-forward horizon (as ptz-control's)
   double rate_filter_s = 0.25;    // Tv of its rate estimate
   double delay_s = 0.0;           // tau
 };

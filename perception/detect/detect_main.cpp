@@ -4,6 +4,8 @@
 // about, never fatal. The tracker gives objects identities; the target is one track, locked until
 // it is gone (TARGET_SELECT changes it); OBJECT_POSE's target_index is that track's object when a
 // trusted measurement updated it in this frame.
+#include <opencv2/imgproc.hpp>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -14,9 +16,12 @@
 #include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "perception/detect/detector.hpp"
+#include "perception/detect/jpeg_window.hpp"
+#include "perception/detect/orientation.hpp"
 #include "perception/detect/stereo.hpp"
 #include "perception/detect/target.hpp"
 #include "perception/detect/tracker.hpp"
+#include "perception/detect/windows.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
@@ -40,9 +45,25 @@ void declare(Params& p) {
   p.add("min_range_m", 0.3, "m", "nearest accepted object", Range::above(0));
   p.add("max_range_m", 50.0, "m", "farthest accepted object", Range::above(0));
   p.addOrder("min_range_m", "max_range_m");
+  p.add("orientation", true,
+        "estimate the yaw of objects whose class is not round (boxes) from both views' outlines");
+  p.add("orientation_height_ratio", OrientationParams{}.height_ratio, "",
+        "orientation: the boxes' height over their footprint's side (0: fitted)",
+        Range::between(0, 100));
+  p.add("orientation_margin_px", 8, "px", "orientation: crop around a box's region",
+        Range::between(1, 256));
+  p.add("orientation_max_per_frame", 4, "",
+        "orientation: boxes fitted per frame at most (the nearest the image centres first; the "
+        "rest counted orientations_skipped)",
+        Range::between(0, 64));
   addFreshnessParams(p, "frame", 500.0, "a STEREO_FRAME");
   addFreshnessParams(p, "select", 2000.0, "a TARGET_SELECT request");
   const TrackerParams t;
+  p.add("track_yaw_psd_rad2_s", t.yaw_psd_rad2_s, "rad^2/s",
+        "tracks: a box's yaw is a random walk of this power spectral density", Range::above(0));
+  p.add("track_yaw_gate_chi2", t.yaw_gate_chi2, "",
+        "tracks: a measured yaw beyond this innovation^2 / variance is refused (1 dof)",
+        Range::above(0));
   p.add("track_jerk_psd_m2_s5", t.jerk_psd_m2_s5, "m^2/s^5",
         "tracks: spectral density of the objects' jerk (constant-acceleration model)",
         Range::above(0));
@@ -62,6 +83,9 @@ void declare(Params& p) {
         "tracks: a measurement outside every gate but within this speed times the time since a "
         "coasting track's last update restarts that track (sharp turns; 0: off)",
         Range::atLeast(0));
+  p.add("track_rank_sigma_cap_m", t.rank_sigma_cap_m, "m",
+        "tracks: pairs rank by Mahalanobis^2 + ln det S, det S capped at this sigma per axis",
+        Range::above(0));
   p.add("track_max_radius_ratio", t.max_radius_ratio, "",
         "tracks: a radius off the track's by more than this factor is not trusted as the centre",
         Range::above(1));
@@ -70,6 +94,18 @@ void declare(Params& p) {
         Range::above(1));
   p.add("pick_radius_px", 15.0, "px",
         "TARGET_SELECT by image point: the largest distance from a track's image", Range::above(0));
+  const WindowParams w;
+  p.add("windows", w.enabled,
+        "with a confirmed track, scan windows around each track's predicted image (and the whole "
+        "frame every window_full_scan_every frames) instead of whole frames");
+  p.add("window_full_scan_every", w.full_scan_every, "frames",
+        "windows: every n-th frame is scanned whole, for new objects (1: every frame)",
+        Range::between(1, 1000));
+  p.add("window_margin_px", w.margin_px, "px",
+        "windows: added on each side of a track's projected extent", Range::between(0, 4096));
+  p.add("window_sigma_scale", w.sigma_scale, "",
+        "windows: a track's extent is its radius plus this many sigma of its predicted position",
+        Range::between(0, 100));
   p.addSection("classes",
                "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
                "intensity_min, intensity_max, shape: circle|square|any, "
@@ -101,7 +137,58 @@ TrackerParams trackerParams(const Params& p) {
   t.coast_s = p.getDouble("track_coast_s");
   t.max_radius_ratio = p.getDouble("track_max_radius_ratio");
   t.recover_speed_m_s = p.getDouble("track_recover_speed_m_s");
+  t.rank_sigma_cap_m = p.getDouble("track_rank_sigma_cap_m");
+  t.yaw_psd_rad2_s = p.getDouble("track_yaw_psd_rad2_s");
+  t.yaw_gate_chi2 = p.getDouble("track_yaw_gate_chi2");
   return t;
+}
+
+WindowParams windowParams(const Params& p) {
+  WindowParams w;
+  w.enabled = p.getBool("windows");
+  w.full_scan_every = p.getInt("window_full_scan_every");
+  w.margin_px = p.getDouble("window_margin_px");
+  w.sigma_scale = p.getDouble("window_sigma_scale");
+  return w;
+}
+
+// The part `rect` of an image (checked by checkStereoFrame) as BGR: a JPEG's rows and columns
+// of it alone; the whole image through decodeImage (the same pixels).
+bool decodeRect(const ptzstereo::image_t& m, const cv::Rect& rect, cv::Mat* out, std::string* why) {
+  const bool whole = rect == cv::Rect(0, 0, m.width, m.height);
+  if (whole || m.encoding != ptzstereo::image_t::ENCODING_JPEG) {
+    cv::Mat image;
+    if (!decodeImage(m, &image, why)) return false;
+    *out = whole ? image : image(rect);
+    return true;
+  }
+  if (!decodeJpegWindow(m.data.data(), m.data.size(), m.width, m.height, rect, out, why))
+    return false;
+  if (m.pixel_format == ptzstereo::image_t::PIXEL_RGB8) cv::cvtColor(*out, *out, cv::COLOR_RGB2BGR);
+  return true;
+}
+
+// The parts `rects` of an image (checked by checkStereoFrame) as BGR: a JPEG's rows and columns of
+// them alone, in one pass; the whole image through decodeImage (the same pixels).
+bool decodeParts(const ptzstereo::image_t& m, const std::vector<cv::Rect>& rects,
+                 std::vector<cv::Mat>* parts, std::string* why) {
+  if (rects.size() == 1) {
+    parts->resize(1);
+    return decodeRect(m, rects[0], &(*parts)[0], why);
+  }
+  if (m.encoding == ptzstereo::image_t::ENCODING_JPEG) {
+    if (!decodeJpegWindows(m.data.data(), m.data.size(), m.width, m.height, rects, parts, why))
+      return false;
+    if (m.pixel_format == ptzstereo::image_t::PIXEL_RGB8) {
+      for (auto& p : *parts) cv::cvtColor(p, p, cv::COLOR_RGB2BGR);
+    }
+    return true;
+  }
+  cv::Mat image;
+  if (!decodeImage(m, &image, why)) return false;
+  parts->clear();
+  for (const auto& r : rects) parts->push_back(image(r));
+  return true;
 }
 
 std::vector<std::string> classNames(const DetectorParams& dp) {
@@ -116,7 +203,15 @@ void copyMatrix(const Eigen::Matrix3d& m, double* out) {
   }
 }
 
-ptzstereo::object_track_t toMessage(const Track& t, double now_s) {
+// Rotation head <- object of a yaw about the head's y axis, its variance the y-y entry.
+void copyYaw(double yaw_rad, double var_rad2, double* wxyz, double* covariance) {
+  const Eigen::Vector4d q = yawQuaternionWxyz(yaw_rad);
+  for (int i = 0; i < 4; ++i) wxyz[i] = q[i];
+  for (int i = 0; i < 9; ++i) covariance[i] = 0;
+  covariance[4] = var_rad2;
+}
+
+ptzstereo::object_track_t toMessage(const Track& t, double now_s, double yaw_psd_rad2_s) {
   ptzstereo::object_track_t m{};
   m.id = t.id;
   m.class_name = t.class_name;
@@ -135,8 +230,12 @@ ptzstereo::object_track_t toMessage(const Track& t, double now_s) {
   m.since_update_s = now_s - t.last_update_s;
   m.object_index = t.object_index;
   m.untrusted_updates = t.untrusted_updates;
-  m.has_orientation = false;
+  m.has_orientation = t.has_yaw;
   m.orientation_wxyz[0] = 1;
+  if (t.has_yaw) {
+    copyYaw(t.yaw_rad, t.yawVarianceAt(now_s, yaw_psd_rad2_s), m.orientation_wxyz,
+            m.orientation_covariance_rad2);
+  }
   return m;
 }
 
@@ -159,12 +258,17 @@ class DetectNode {
         tracker_(trackerParams(p)),
         class_names_(classNames(detector_.params())),
         selector_(target_class_, class_names_, p.getDouble("pick_radius_px")),
-        trusted_area_ratio_(p.getDouble("trusted_area_ratio")) {
+        trusted_area_ratio_(p.getDouble("trusted_area_ratio")),
+        windows_(windowParams(p), {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()) {
     stereo_.max_epipolar_px = p.getDouble("max_epipolar_px");
     stereo_.max_area_ratio = p.getDouble("max_area_ratio");
     stereo_.pixel_sigma_px = p.getDouble("pixel_sigma_px");
     stereo_.min_range_m = p.getDouble("min_range_m");
     stereo_.max_range_m = p.getDouble("max_range_m");
+    orientation_ = p.getBool("orientation");
+    orientation_params_.height_ratio = p.getDouble("orientation_height_ratio");
+    orientation_margin_px_ = p.getInt("orientation_margin_px");
+    orientation_max_per_frame_ = p.getInt("orientation_max_per_frame");
     // Always the newest frame, never a backlog.
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
@@ -197,23 +301,6 @@ class DetectNode {
     return true;
   }
 
-  bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
-    if (!acceptable(m)) return false;
-    // Both images at once: JPEG decoding is the larger part of a frame's work.
-    std::string errors[2];
-    bool ok[2] = {false, false};
-    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-      for (int i = range.start; i < range.end; ++i) {
-        ok[i] = decodeImage(i == 0 ? m.left : m.right, i == 0 ? left : right, &errors[i]);
-      }
-    });
-    if (!ok[0] || !ok[1]) {
-      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + (ok[0] ? errors[1] : errors[0]));
-      return false;
-    }
-    return true;
-  }
-
   void drop(const std::string& reason, const std::string& message) {
     status_.countDropped(ch_frame_, reason);
     log_.warn(reason, "ptz-detect: dropped " + message);
@@ -230,24 +317,44 @@ class DetectNode {
                formatNumber(saturatingDiffUs(received, m->publish_utime) / 1000.0) + " ms ago)");
       return;
     }
-    cv::Mat left, right;
-    if (!decode(*m, &left, &right)) return;
-    // Counted in once accepted: every message is either in or dropped, never both.
-    status_.countIn(ch_frame_, latencyMs(m->utime, received));
-    const auto t0 = std::chrono::steady_clock::now();
-    // Left and right on two cores (Detector::detect is const and shares nothing mutable).
-    std::vector<Region> lr, rr;
-    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-      for (int i = range.start; i < range.end; ++i)
-        (i == 0 ? lr : rr) = detector_.detect(i == 0 ? left : right);
-    });
+    if (!acceptable(*m)) return;
     const CameraView lv = rig_.view(Side::kLeft, {m->left.pan_rad, m->left.tilt_rad, m->left.zoom});
     const CameraView rv =
         rig_.view(Side::kRight, {m->right.pan_rad, m->right.tilt_rad, m->right.zoom});
-    const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
     const double t_s = m->utime * 1e-6;
-    tracker_.update(t_s, trackMeasurements(objects, lr, rr, lv, rv, class_names_,
-                                           trusted_area_ratio_, tracker_.tracks(), t_s));
+    const auto t0 = std::chrono::steady_clock::now();
+    // Windows around the tracks' predicted images, or the whole frames; decoding only what is
+    // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
+    ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
+    std::vector<Region> lr, rr;
+    std::string why;
+    const bool decoded = windows_.detect(
+        detector_, &plan,
+        [&](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
+          return decodeParts(m->left, r, out, e);
+        },
+        [&](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
+          return decodeParts(m->right, r, out, e);
+        },
+        &lr, &rr, &why);
+    if (!decoded) {
+      drop("bad_image", "frame " + std::to_string(m->seq) + ": " + why);
+      return;
+    }
+    // Counted in once accepted: every message is either in or dropped, never both.
+    status_.countIn(ch_frame_, latencyMs(m->utime, received));
+    const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
+    std::vector<TrackMeasurement> measurements = trackMeasurements(
+        objects, lr, rr, lv, rv, class_names_, trusted_area_ratio_, tracker_.tracks(), t_s);
+    const std::vector<BoxYaw> yaws = estimateYaws(*m, objects, measurements, lr, rr, lv, rv);
+    for (TrackMeasurement& tm : measurements) {
+      if (tm.object_index < 0 || static_cast<size_t>(tm.object_index) >= yaws.size()) continue;
+      const BoxYaw& y = yaws[static_cast<size_t>(tm.object_index)];
+      tm.has_yaw = y.ok;
+      tm.yaw_rad = y.yaw_rad;
+      tm.yaw_var_rad2 = y.variance_rad2;
+    }
+    tracker_.update(t_s, measurements);
     const int64_t target_id = chooseTarget(t_s);
     last_views_ = {lv, rv};
     processing_ms_.push_back(
@@ -279,6 +386,13 @@ class DetectNode {
       obj.left_index = o.left;
       obj.right_index = o.right;
       obj.radius_m = objectRadiusM(lr[static_cast<size_t>(o.left)], o.position_head_m, lv);
+      const BoxYaw& yaw = yaws[pose.objects.size()];
+      obj.has_orientation = yaw.ok;
+      obj.orientation_wxyz[0] = 1;
+      if (yaw.ok) {
+        copyYaw(yaw.yaw_rad, yaw.variance_rad2, obj.orientation_wxyz,
+                obj.orientation_covariance_rad2);
+      }
       pose.objects.push_back(obj);
     }
     pose.num_objects = static_cast<int32_t>(pose.objects.size());
@@ -292,7 +406,9 @@ class DetectNode {
     tracks.right_ptz = pose.right_ptz;
     tracks.target_id = target_id;
     tracks.target_reason = selector_.reason();
-    for (const auto& t : tracker_.tracks()) tracks.tracks.push_back(toMessage(t, t_s));
+    for (const auto& t : tracker_.tracks()) {
+      tracks.tracks.push_back(toMessage(t, t_s, tracker_.params().yaw_psd_rad2_s));
+    }
     tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
     det.publish_utime = wallUtime();
     status_.publish(ch_detections_, det, latencyMs(m->utime, det.publish_utime));
@@ -303,10 +419,13 @@ class DetectNode {
     status_.setCounter("tracks_live", static_cast<int64_t>(tracker_.tracks().size()));
     status_.setCounter("tracks_started", tracker_.tracksStarted());
     status_.setCounter("tracks_recovered", tracker_.recoveries());
+    status_.setCounter("track_yaws_accepted", tracker_.yawsAccepted());
+    status_.setCounter("track_yaws_refused", tracker_.yawsRefused());
     status_.setCounter("tracks_refused", tracker_.tracksRefused());
     status_.setCounter("target_id", target_id);
-    for (const auto& [why, n] : tracker_.untrustedCounts())
-      status_.setCounter("untrusted_" + why, n);
+    for (const auto& [reason, n] : tracker_.untrustedCounts())
+      status_.setCounter("untrusted_" + reason, n);
+    for (const auto& [name, n] : windows_.counts()) status_.setCounter(name, n);
     status_.increment("frames_processed");
     if (pose.target_index < 0) status_.increment("frames_without_target");
     if (processing_ms_.size() >= 30) {
@@ -316,6 +435,71 @@ class DetectNode {
                          static_cast<int64_t>(percentile(processing_ms_, 99) * 1000));
       processing_ms_.clear();
     }
+    if (orientation_us_.size() >= 30) {
+      status_.setCounter("orientation_us_p50",
+                         static_cast<int64_t>(percentile(orientation_us_, 50)));
+      status_.setCounter("orientation_us_p99",
+                         static_cast<int64_t>(percentile(orientation_us_, 99)));
+      orientation_us_.clear();
+    }
+  }
+
+  // The yaw of each object whose class has an orientation (boxes), by object; not ok for the
+  // others, a region an image border cuts, or a view that does not decode.
+  // The yaws of the trusted boxes (a cut, merged or half-hidden region gives none), at most
+  // orientation_max_per_frame of them, nearest the left image's centre first.
+  std::vector<BoxYaw> estimateYaws(const ptzstereo::stereo_frame_t& m,
+                                   const std::vector<StereoObject>& objects,
+                                   const std::vector<TrackMeasurement>& measurements,
+                                   const std::vector<Region>& lr, const std::vector<Region>& rr,
+                                   const CameraView& lv, const CameraView& rv) {
+    std::vector<BoxYaw> yaws(objects.size());
+    if (!orientation_) return yaws;
+    std::vector<bool> trusted(objects.size());
+    for (const TrackMeasurement& tm : measurements) {
+      if (tm.object_index >= 0 && static_cast<size_t>(tm.object_index) < objects.size()) {
+        trusted[static_cast<size_t>(tm.object_index)] = tm.untrusted.empty();
+      }
+    }
+    std::vector<std::pair<double, size_t>> boxes;  // distance from the image centre, index
+    for (size_t i = 0; i < objects.size(); ++i) {
+      const size_t ci = static_cast<size_t>(objects[i].class_index);
+      if (!trusted[i] || !classHasOrientation(detector_.params().classes[ci])) continue;
+      const cv::Point2d c = lr[static_cast<size_t>(objects[i].left)].centroid_px;
+      boxes.emplace_back(std::hypot(c.x - m.left.width / 2.0, c.y - m.left.height / 2.0), i);
+    }
+    std::sort(boxes.begin(), boxes.end());
+    const size_t most = static_cast<size_t>(orientation_max_per_frame_);
+    if (boxes.size() > most) {
+      status_.increment("orientations_skipped", static_cast<int64_t>(boxes.size() - most));
+      boxes.resize(most);
+    }
+    for (const auto& [distance_px, i] : boxes) {
+      const StereoObject& o = objects[i];
+      const size_t ci = static_cast<size_t>(o.class_index);
+      const Region& l = lr[static_cast<size_t>(o.left)];
+      const Region& r = rr[static_cast<size_t>(o.right)];
+      const cv::Size lsize(m.left.width, m.left.height), rsize(m.right.width, m.right.height);
+      const auto t0 = std::chrono::steady_clock::now();
+      cv::Mat lcrop, rcrop;
+      std::string why;
+      // Enough margin that the crop's pixels are the full scan's (the detector's filters).
+      const int margin_px = std::max(orientation_margin_px_, detector_.exactMarginPx());
+      const cv::Rect lc = boxCrop(l.bbox, lsize, margin_px);
+      const cv::Rect rc = boxCrop(r.bbox, rsize, margin_px);
+      if (regionCut(l.bbox, lsize) || regionCut(r.bbox, rsize) ||
+          !decodeRect(m.left, lc, &lcrop, &why) || !decodeRect(m.right, rc, &rcrop, &why)) {
+        status_.increment("orientations_failed");
+        continue;
+      }
+      yaws[i] = estimateBoxYaw(makeBoxView(detector_, ci, lcrop, lc.tl(), l.bbox, lv),
+                               makeBoxView(detector_, ci, rcrop, rc.tl(), r.bbox, rv),
+                               o.position_head_m, orientation_params_);
+      orientation_us_.push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      status_.increment(yaws[i].ok ? "orientations_estimated" : "orientations_failed");
+    }
+    return yaws;
   }
 
   // The selector's choice after this frame's tracker update; a new choice is said on stderr.
@@ -396,7 +580,13 @@ class DetectNode {
   TargetSelector selector_;
   double trusted_area_ratio_;
   std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
+  WindowScanner windows_;
   std::vector<double> processing_ms_;
+  bool orientation_;
+  OrientationParams orientation_params_;
+  int orientation_margin_px_;
+  int orientation_max_per_frame_;
+  std::vector<double> orientation_us_;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
   std::unique_ptr<SafeSubscription<ptzstereo::target_select_t>> selects_;
 };

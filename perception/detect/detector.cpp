@@ -225,6 +225,35 @@ cv::Mat Detector::mask(const cv::Mat& bgr, size_t index) const {
 }
 
 std::vector<Region> Detector::detect(const cv::Mat& bgr) const {
+  return detect(bgr, cv::Point(0, 0));
+}
+
+int Detector::exactMarginPx() const {
+  // Median, then erosion and dilation twice each (opening, closing); one more pixel so that a
+  // region touching the window's edge is seen touching it.
+  return params_.filter_size_px / 2 + 4 * (params_.morph_size_px / 2) + 1;
+}
+
+std::vector<Region> Detector::detectWindow(const cv::Mat& crop, const cv::Point& crop_origin,
+                                           const cv::Rect& window, const cv::Size& image,
+                                           bool* cut) const {
+  // The window's interior: its edge rows and columns, unless they are the image's, are where a
+  // region that goes on outside shows.
+  const int x0 = window.x > 0 ? window.x + 1 : 0, y0 = window.y > 0 ? window.y + 1 : 0;
+  const int x1 = window.br().x < image.width ? window.br().x - 1 : image.width;
+  const int y1 = window.br().y < image.height ? window.br().y - 1 : image.height;
+  const cv::Rect interior(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0));
+  *cut = false;
+  return detectIn(crop, crop_origin, &window, &interior, cut);
+}
+
+std::vector<Region> Detector::detect(const cv::Mat& bgr, const cv::Point& offset) const {
+  return detectIn(bgr, offset, nullptr, nullptr, nullptr);
+}
+
+std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offset,
+                                       const cv::Rect* window, const cv::Rect* interior,
+                                       bool* cut) const {
   cv::Mat filtered, labels;
   cv::medianBlur(bgr, filtered, params_.filter_size_px);
   label(filtered, &labels);
@@ -240,6 +269,14 @@ std::vector<Region> Detector::detect(const cv::Mat& bgr) const {
     const size_t first = regions.size();
     for (const auto& contour : contours) {
       const cv::Rect bbox = cv::boundingRect(contour);
+      if (window) {
+        // Judged before the area and shape tests: a region cut by the window fails them.
+        const cv::Rect in_image = bbox + offset;
+        if ((in_image & *interior) != in_image) {
+          if (!(in_image & *window).empty()) *cut = true;
+          continue;
+        }
+      }
       // Moments of the region's pixels (not of the polygon), alone in its box: the centre of
       // gravity of exactly this region.
       cv::Mat alone(bbox.size(), CV_8U, cv::Scalar(0));
@@ -250,8 +287,10 @@ std::vector<Region> Detector::detect(const cv::Mat& bgr) const {
       Region r;
       r.class_index = static_cast<int>(ci);
       r.area_px2 = mo.m00;
-      r.centroid_px = {bbox.x + mo.m10 / mo.m00, bbox.y + mo.m01 / mo.m00};
-      r.bbox = bbox;
+      // bbox.x + offset first, as an int: the same double as a full scan's.
+      r.centroid_px = {(bbox.x + offset.x) + mo.m10 / mo.m00,
+                       (bbox.y + offset.y) + mo.m01 / mo.m00};
+      r.bbox = bbox + offset;
       if (c.shape != "any") {
         const ShapeScore score = huShape(mo, templates_[ci]);
         r.shape_distance = score.distance;

@@ -70,6 +70,19 @@ class Detector {
 
   // Regions of every class in an 8-bit BGR image, largest first within a class.
   std::vector<Region> detect(const cv::Mat& bgr) const;
+  // The same on a part of an image whose top-left pixel is `offset` in the full image: regions in
+  // full-image coordinates (the part is filtered as an image of its own, see exactMarginPx).
+  std::vector<Region> detect(const cv::Mat& part, const cv::Point& offset) const;
+  // How far the filters reach (median, opening, closing): a part's pixels this far from its edges
+  // (but for edges on the image's) are those of a full scan.
+  int exactMarginPx() const;
+  // Regions of `window` (full-image coordinates) from `crop`, the pixels of the full image (of
+  // size image) from crop_origin, holding the window and exactMarginPx around it (or up to the
+  // image's edge): exactly a full scan's regions that lie inside the window, not touching its
+  // edge (but where that is the image's). *cut: a region crosses the window's edge (it may go on
+  // outside; its pixels are not a full scan's).
+  std::vector<Region> detectWindow(const cv::Mat& crop, const cv::Point& crop_origin,
+                                   const cv::Rect& window, const cv::Size& image, bool* cut) const;
   // Whether a BGR colour falls in a class's HSI window (the definition the table is built from).
   static bool inClass(const ColorClass& c, uchar b, uchar g, uchar r);
   // The segmentation mask of class `index` in a (filtered) BGR image, after clean-up.
@@ -78,6 +91,9 @@ class Detector {
 
  private:
   void label(const cv::Mat& bgr, cv::Mat* labels) const;
+  // detect() at offset; with a window, only regions inside *interior, *cut when one crosses it.
+  std::vector<Region> detectIn(const cv::Mat& bgr, const cv::Point& offset, const cv::Rect* window,
+                               const cv::Rect* interior, bool* cut) const;
   // The class's mask; *roi: the part of it that holds the class's pixels (empty: none).
   cv::Mat maskFromLabels(const cv::Mat& labels, size_t index, cv::Rect* roi) const;
 

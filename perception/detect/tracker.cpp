@@ -1,5 +1,7 @@
 #include "perception/detect/tracker.hpp"
 
+#include "perception/detect/orientation.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
@@ -46,6 +48,10 @@ Eigen::Vector3d Track::positionAt(double when_s) const {
   return x.head<3>() + dt * x.segment<3>(3) + dt * dt / 2 * x.tail<3>();
 }
 
+double Track::yawVarianceAt(double when_s, double yaw_psd_rad2_s) const {
+  return yaw_var_rad2 + yaw_psd_rad2_s * std::max(0.0, when_s - yaw_t_s);
+}
+
 Tracker::Tracker(TrackerParams params) : p_(params) {}
 
 const Track* Tracker::find(int64_t id) const {
@@ -87,7 +93,38 @@ bool Tracker::radiusOutOfLine(const Track& t, const TrackMeasurement& m) const {
          std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio;
 }
 
-void Tracker::correct(Track* t, const TrackMeasurement& m) const {
+void Tracker::correctYaw(Track* t, const TrackMeasurement& m) {
+  if (!m.has_yaw || !std::isfinite(m.yaw_rad) || !(m.yaw_var_rad2 > 0) ||
+      !std::isfinite(m.yaw_var_rad2) || !(m.yaw_period_rad > 0)) {
+    return;
+  }
+  const bool fresh =
+      !t->has_yaw || t->yaw_period_rad != m.yaw_period_rad || t->yaw_misses >= p_.yaw_reset_misses;
+  if (!fresh) {
+    const double p = t->yawVarianceAt(t->t_s, p_.yaw_psd_rad2_s);
+    const double innovation = wrapAngle(m.yaw_rad - t->yaw_rad, m.yaw_period_rad);
+    const double s = p + m.yaw_var_rad2;
+    if (innovation * innovation / s > p_.yaw_gate_chi2) {
+      ++t->yaw_misses;
+      ++yaws_refused_;
+      return;
+    }
+    const double k = p / s;
+    t->yaw_rad = wrapAngle(t->yaw_rad + k * innovation, m.yaw_period_rad);
+    t->yaw_var_rad2 = (1 - k) * p;
+  } else {
+    t->yaw_rad = wrapAngle(m.yaw_rad, m.yaw_period_rad);
+    t->yaw_var_rad2 = m.yaw_var_rad2;
+    t->yaw_period_rad = m.yaw_period_rad;
+    t->has_yaw = true;
+  }
+  t->yaw_t_s = t->t_s;
+  t->yaw_misses = 0;
+  ++yaws_accepted_;
+}
+
+void Tracker::correct(Track* t, const TrackMeasurement& m) {
+  correctYaw(t, m);
   const Eigen::Matrix3d S = t->positionCovariance() + measurementCovariance(m);
   const Eigen::Matrix<double, 9, 3> PHt = t->P.leftCols<3>();
   const Eigen::Matrix<double, 9, 3> K = PHt * S.inverse();
@@ -99,7 +136,7 @@ void Tracker::correct(Track* t, const TrackMeasurement& m) const {
   t->P = (t->P + t->P.transpose()) / 2;
 }
 
-void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) const {
+void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) {
   t->x.setZero();
   t->x.head<3>() = m.position_m;
   t->P.setZero();
@@ -108,6 +145,8 @@ void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) const {
   t->P.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_accel_sigma_m_s2, 2);
   t->t_s = t->last_update_s = t->last_seen_s = t_s;
   t->object_index = m.object_index;
+  // The same object: its yaw goes on (a wrong one is refused and then restarted by the gate).
+  correctYaw(t, m);
 }
 
 Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
@@ -118,7 +157,8 @@ Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
     const double since_s = t_s - t.last_update_s;
     if (since_s > p_.recover_window_s) continue;  // longer: anything could be there
     if (radiusOutOfLine(t, m)) continue;
-    const double reach_m = p_.recover_speed_m_s * since_s;
+    // At least the object's own radius: no other object of its size has its centre that near.
+    const double reach_m = std::max(p_.recover_speed_m_s * since_s, t.radius_m);
     const double d = (m.position_m - t.position()).norm();
     if (d <= reach_m && d < best_m) {
       best_m = d;
@@ -142,6 +182,7 @@ void Tracker::start(double t_s, const TrackMeasurement& m) {
   t.hits = 1;
   t.object_index = m.object_index;
   t.state = p_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
+  correctYaw(&t, m);
   tracks_.push_back(t);
 }
 
@@ -157,6 +198,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   eraseExpired(t_s);
   // Every gated (track, measurement) pair of one class, nearest first, each used once.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
+  const double max_log_det = 3 * std::log(p_.rank_sigma_cap_m * p_.rank_sigma_cap_m);
   for (size_t i = 0; i < tracks_.size(); ++i) {
     for (size_t j = 0; j < measurements.size(); ++j) {
       if (tracks_[i].class_name != measurements[j].class_name) continue;
@@ -166,7 +208,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       // Gated by d2, ranked by the likelihood's cost d2 + ln det S: a coasting track's wide
       // covariance makes every d2 small, which must not let it take another object's
       // measurement before that object's own, tighter track.
-      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2 + log_det, i, j);
+      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2 + std::min(log_det, max_log_det), i, j);
     }
   }
   const double frame_dt = std::max(t_s - last_t_s_, 0.0);

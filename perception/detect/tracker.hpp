@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -36,12 +37,22 @@ struct TrackerParams {
   // guide to where a hidden object goes, and extrapolating it quadratically runs away.
   double coast_accel_decay_s = 0.3;
   // A trusted measurement no gate took, of the track's radius, within recover_speed_m_s times the
-  // time since the last update (at most recover_window_s ago) of a coasting track's prediction,
+  // time since the last update (at most recover_window_s ago; at least the track's radius) of a
+  // coasting track's prediction,
   // restarts that track there (same id, velocity unknown): an object that turned sharply (a
   // bounce, a reversal) keeps its identity. 0: off.
   double recover_speed_m_s = 1.5;
   double recover_window_s = 0.5;  // only this soon after the track's last update
   size_t max_tracks = 64;         // live tracks at most; measurements beyond start none (counted)
+  // Pairs rank by d2 + ln det S, det S capped at this sigma per axis: past it a track's spread
+  // says only that it is lost, and must not outrank a nearer prediction that is merely older.
+  double rank_sigma_cap_m = 0.3;
+  // Yaw (boxes): a random walk of this power spectral density, rad^2/s, filtered per track;
+  // a measured yaw whose innovation^2 over its variance exceeds yaw_gate_chi2 is refused (1 dof,
+  // p = 0.001), and yaw_reset_misses refusals in a row start the yaw afresh (a wrong lock).
+  double yaw_psd_rad2_s = 0.05;
+  double yaw_gate_chi2 = 10.83;
+  int yaw_reset_misses = 3;
 };
 
 enum class TrackState { kTentative, kConfirmed, kCoasting };
@@ -54,6 +65,12 @@ struct TrackMeasurement {
   double radius_m = 0;    // <= 0: unknown
   std::string untrusted;  // why it is not the object's centre ("" = trusted)
   int object_index = -1;  // into the frame's objects
+  // A box's yaw about the head's y axis, its variance, and the period of its symmetry (pi/2 for
+  // a square footprint): yaws a period apart are the same.
+  bool has_yaw = false;
+  double yaw_rad = 0;
+  double yaw_var_rad2 = 0;
+  double yaw_period_rad = M_PI / 2;
 };
 
 struct Track {
@@ -68,6 +85,14 @@ struct Track {
   int hits = 0;
   int untrusted_updates = 0;
   int object_index = -1;  // the measurement that updated it in the last frame (-1: none)
+  // The filtered yaw (boxes; has_yaw false: none yet or a sphere), its variance at yaw_t_s, its
+  // period, and the measured yaws refused in a row.
+  bool has_yaw = false;
+  double yaw_rad = 0;
+  double yaw_var_rad2 = 0;
+  double yaw_t_s = 0;
+  double yaw_period_rad = M_PI / 2;
+  int yaw_misses = 0;
 
   Eigen::Vector3d position() const { return x.head<3>(); }
   Eigen::Vector3d velocity() const { return x.segment<3>(3); }
@@ -76,6 +101,8 @@ struct Track {
   Eigen::Matrix3d velocityCovariance() const { return P.block<3, 3>(3, 3); }
   // Position extrapolated to t_s by the motion model (no state change).
   Eigen::Vector3d positionAt(double t_s) const;
+  // The yaw's variance at t_s (the random walk's growth since yaw_t_s).
+  double yawVarianceAt(double t_s, double yaw_psd_rad2_s) const;
 };
 
 class Tracker {
@@ -94,6 +121,10 @@ class Tracker {
   // Measurements that started no track because max_tracks were live, since the start.
   int64_t tracksRefused() const { return tracks_refused_; }
   int64_t tracksStarted() const { return next_id_ - 1; }
+  // Measured yaws the yaw filter took and refused (its gate), since the start.
+  int64_t yawsAccepted() const { return yaws_accepted_; }
+  int64_t yawsRefused() const { return yaws_refused_; }
+  const TrackerParams& params() const { return p_; }
 
  private:
   void predict(Track* t, double t_s) const;
@@ -101,12 +132,14 @@ class Tracker {
   double distance2(const Track& t, const TrackMeasurement& m, double* log_det) const;
   // Whether m's radius is off t's by more than max_radius_ratio (both known).
   bool radiusOutOfLine(const Track& t, const TrackMeasurement& m) const;
-  void correct(Track* t, const TrackMeasurement& m) const;
+  void correct(Track* t, const TrackMeasurement& m);
+  // The yaw filter's update by m's yaw (at t's time), with the wrap of its period.
+  void correctYaw(Track* t, const TrackMeasurement& m);
   Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
   void start(double t_s, const TrackMeasurement& m);
   // The coasting track of m's class whose prediction is nearest m within the recovery radius.
   Track* recoverable(double t_s, const TrackMeasurement& m);
-  void restart(Track* t, double t_s, const TrackMeasurement& m) const;
+  void restart(Track* t, double t_s, const TrackMeasurement& m);
   void eraseExpired(double t_s);
 
   TrackerParams p_;
@@ -117,6 +150,8 @@ class Tracker {
   std::map<std::string, int64_t> untrusted_counts_;
   int64_t recoveries_ = 0;
   int64_t tracks_refused_ = 0;
+  int64_t yaws_accepted_ = 0;
+  int64_t yaws_refused_ = 0;
 };
 
 }  // namespace ptz::perception

@@ -41,8 +41,16 @@ public class DecodeAll {
     failed += check(((ptzstereo.image_t) decoded.get("image_t")).data[5] == 6, "image data");
     failed += check(((ptzstereo.process_status_t) decoded.get("process_status_t")).counters[0].value
         == 300, "status counter");
-    failed += check(((ptzstereo.object_pose_t) decoded.get("object_pose_t")).objects[0].position_m[2]
-        == 3.0, "pose z");
+    ptzstereo.object_3d_t pose_obj = ((ptzstereo.object_pose_t) decoded.get("object_pose_t")).objects[0];
+    failed += check(pose_obj.position_m[2] == 3.0, "pose z");
+    failed += check(pose_obj.has_orientation && pose_obj.orientation_wxyz[0] == 0.5
+        && pose_obj.orientation_wxyz[2] == -0.5 && pose_obj.orientation_covariance_rad2[4] == 0.01,
+        "pose orientation");
+    ptzstereo.sim_object_truth_t truth_obj =
+        ((ptzstereo.sim_truth_t) decoded.get("sim_truth_t")).objects[0];
+    failed += check(truth_obj.shape.equals("box") && truth_obj.orientation_wxyz[0] == 0.25
+        && truth_obj.orientation_wxyz[2] == 0.75 && truth_obj.visible_fraction[1] == 0.625,
+        "truth orientation and visibility");
     ptzstereo.object_tracks_t tracks = (ptzstereo.object_tracks_t) decoded.get("object_tracks_t");
     failed += check(tracks.num_tracks == 2 && tracks.tracks[1].id == 8 && tracks.target_id == 7
         && tracks.tracks[0].state == ptzstereo.object_track_t.STATE_COASTING

@@ -103,11 +103,21 @@ TEST(LcmTypes, DetectionsAndPoseRoundTrip) {
   o.class_name = "red_ball";
   o.position_m[2] = 3.0;
   o.covariance_m2[8] = 1e-4;
-  p.objects = {o};
-  p.num_objects = 1;
+  o.has_orientation = true;
+  o.orientation_wxyz[0] = 0.5;
+  o.orientation_wxyz[2] = -0.5;
+  o.orientation_covariance_rad2[4] = 0.01;
+  p.objects = {o, o};
+  p.objects[1].has_orientation = false;
+  p.num_objects = 2;
   p.target_index = 0;
   auto pout = roundTrip(p);
   EXPECT_DOUBLE_EQ(pout.objects[0].position_m[2], 3.0);
+  EXPECT_TRUE(pout.objects[0].has_orientation);
+  EXPECT_FALSE(pout.objects[1].has_orientation);
+  EXPECT_DOUBLE_EQ(pout.objects[0].orientation_wxyz[0], 0.5);
+  EXPECT_DOUBLE_EQ(pout.objects[0].orientation_wxyz[2], -0.5);
+  EXPECT_DOUBLE_EQ(pout.objects[0].orientation_covariance_rad2[4], 0.01);
   EXPECT_DOUBLE_EQ(pout.objects[0].covariance_m2[8], 1e-4);
 }
 
@@ -245,11 +255,17 @@ TEST(LcmTypes, PointCloudTruthStatusRoundTrip) {
   ot.class_name = "red_ball";
   ot.shape = "sphere";
   ot.position_m[0] = 1.5;
+  ot.orientation_wxyz[0] = 0.25;
+  ot.orientation_wxyz[2] = 0.75;
+  ot.visible_fraction[0] = 0.5;
   t.objects = {ot};
   t.num_objects = 1;
   t.left_camera.fx_px = 500;
   auto tout = roundTrip(t);
   EXPECT_DOUBLE_EQ(tout.objects[0].position_m[0], 1.5);
+  EXPECT_DOUBLE_EQ(tout.objects[0].orientation_wxyz[0], 0.25);
+  EXPECT_DOUBLE_EQ(tout.objects[0].orientation_wxyz[2], 0.75);
+  EXPECT_DOUBLE_EQ(tout.objects[0].visible_fraction[0], 0.5);
   EXPECT_DOUBLE_EQ(tout.left_camera.fx_px, 500);
 
   ptzstereo::process_status_t s{};

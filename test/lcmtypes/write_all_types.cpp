@@ -98,6 +98,10 @@ int main(int argc, char** argv) {
   object_3d_t obj{};
   obj.class_name = "red_ball";
   obj.position_m[2] = 3;
+  obj.has_orientation = true;
+  obj.orientation_wxyz[0] = 0.5;
+  obj.orientation_wxyz[2] = -0.5;
+  obj.orientation_covariance_rad2[4] = 0.01;
   write("object_3d_t", obj);
   object_pose_t pose{};
   pose.num_objects = 1;
@@ -155,7 +159,10 @@ int main(int argc, char** argv) {
   sim_object_truth_t ot{};
   ot.name = "ball";
   ot.class_name = "red_ball";
-  ot.shape = "sphere";
+  ot.shape = "box";
+  ot.orientation_wxyz[0] = 0.25;
+  ot.orientation_wxyz[2] = 0.75;
+  ot.visible_fraction[1] = 0.625;
   write("sim_object_truth_t", ot);
   sim_truth_t truth{};
   truth.left_camera = cam;

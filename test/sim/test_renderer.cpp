@@ -146,3 +146,47 @@ TEST(Renderer, NoiseHasTheConfiguredSigmaAndIsRepeatable) {
   EXPECT_NEAR(mean[0], 128, 0.1);
   EXPECT_NEAR(stddev[0], 3.0, 0.15);
 }
+
+TEST(Renderer, VisibleFractionsAreTheSharesNoNearerObjectHides) {
+  // The ball straight ahead of the left camera, 3 m away; a box 2 m away whose left edge lies on
+  // the ray to the ball's centre hides its right half (that edge projects to a straight line
+  // through the principal point, distortion or not); a second box hides it all.
+  const StereoRig rig = StereoRig::makeDefault();
+  const ptz::CameraView view = rig.view(Side::kLeft, {});
+  const Eigen::Vector3d c = view.position_head_m;
+  Scene scene = ballScene(c + Eigen::Vector3d(0, 0, 3), 0.1);
+  SceneObject box;
+  box.name = "box";
+  box.shape = SceneObject::Shape::kBox;
+  box.half_extents_m = {0.5, 0.5, 0.05};
+  box.color_bgr = {0, 200, 0};
+  box.trajectory.centre_m = c + Eigen::Vector3d(0.5, 0, 2);
+  scene.objects.push_back(box);
+  std::vector<double> fraction;
+  cv::Mat img;
+  {
+    Renderer renderer(scene);
+    renderer.render(view, 0.0, &img, &fraction);
+    ASSERT_EQ(fraction.size(), 2u);
+    EXPECT_NEAR(fraction[0], 0.5, 0.02);
+    EXPECT_DOUBLE_EQ(fraction[1], 1.0);  // nothing is in front of the box
+  }
+  scene.objects[1].trajectory.centre_m = c + Eigen::Vector3d(0, 0, 2);
+  {
+    Renderer renderer(scene);
+    renderer.render(view, 0.0, &img, &fraction);
+    EXPECT_DOUBLE_EQ(fraction[0], 0.0);
+  }
+  scene.objects[1].trajectory.centre_m = c + Eigen::Vector3d(0, 0, 4);  // behind the ball now
+  {
+    Renderer renderer(scene);
+    renderer.render(view, 0.0, &img, &fraction);
+    EXPECT_DOUBLE_EQ(fraction[0], 1.0);
+    EXPECT_LT(fraction[1], 1.0);
+  }
+  // Out of the image: none of its pixels, fraction 0.
+  scene.objects[0].trajectory.centre_m = c + Eigen::Vector3d(0, 0, -3);
+  Renderer renderer(scene);
+  renderer.render(view, 0.0, &img, &fraction);
+  EXPECT_DOUBLE_EQ(fraction[0], 0.0);
+}

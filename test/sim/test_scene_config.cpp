@@ -1,6 +1,9 @@
 // A scenario's objects read from a config file, and a bad one named.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#include <cmath>
 #include <fstream>
 
 #include "common/config.hpp"
@@ -31,10 +34,17 @@ TEST(SceneConfig, ObjectsAreReadAndBadOnesNamed) {
       "      color_bgr: [0, 0, 200], trajectory: \"circle\", centre_m: [0, 0, 3],\n"
       "      amplitude_m: [1, 0, 1], period_s: 10 }\n"
       "  - { name: \"b\", class: \"green_box\", shape: \"box\", half_extents_m: [0.1, 0.2, 0.3],\n"
-      "      color_bgr: [0, 200, 0] }\n");
+      "      color_bgr: [0, 200, 0], yaw_rad: 0.5, yaw_rate_rad_s: -0.25 }\n");
   const auto scene = sceneOf(cfg);
   ASSERT_EQ(scene.objects.size(), 2u);
   EXPECT_EQ(scene.objects[1].class_name, "green_box");
+  // The box turns from 0.5 rad at -0.25 rad/s about the head's y axis; a sphere has no yaw.
+  EXPECT_NEAR(scene.objects[1].yaw(2.0), 0.0, 1e-12);
+  EXPECT_NEAR(scene.objects[1].yaw(4.0), -0.5, 1e-12);
+  const Eigen::Vector3d x = scene.objects[1].rotationHeadObject(0) * Eigen::Vector3d::UnitX();
+  EXPECT_NEAR(x.x(), std::cos(0.5), 1e-12);
+  EXPECT_NEAR(x.z(), -std::sin(0.5), 1e-12);
+  EXPECT_EQ(scene.objects[0].yaw(3.0), 0.0);
   // A circle of radius 1 m in x/z about (0, 0, 3): a quarter period later it is at +z.
   EXPECT_NEAR(scene.objects[0].trajectory.position(0).x(), 1.0, 1e-12);
   EXPECT_NEAR(scene.objects[0].trajectory.position(2.5).z(), 4.0, 1e-12);
@@ -64,6 +74,10 @@ TEST(SceneConfig, UnknownFieldsAndValuesOutOfRangeAreRefusedWithTheirPath) {
   const std::vector<Case> cases = {
       {"objects:\n" + ball + ", speed_mps: 2 }\n", "objects[0].speed_mps: unknown field"},
       {"objects:\n" + ball + ", yaw_rad: 1 }\n", "objects[0].yaw_rad: unknown field"},
+      {"objects:\n" + ball + ", yaw_rate_rad_s: 1 }\n", "objects[0].yaw_rate_rad_s: unknown field"},
+      {"objects:\n  - { name: \"b\", class: \"green_box\", shape: \"box\", "
+       "half_extents_m: [0.1, 0.1, 0.1], color_bgr: [0, 200, 0], yaw_rate_rad_s: 30 }\n",
+       "objects[0].yaw_rate_rad_s: must be within -20 .. 20, got '30'"},
       {"scene: { floor_heigth_m: 1.4 }\n", "scene.floor_heigth_m: unknown field"},
       {"chessboard: { inner_cols: 9, inner_rows: 6, square_m: 0.1, centre: [0, 0, 2] }\n",
        "chessboard.centre: unknown field"},

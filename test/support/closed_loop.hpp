@@ -53,12 +53,15 @@ struct Listener {
 };
 
 // Starts ptz-detect and ptz-control, waits until both are up, runs ptz-sim to its end.
+// target_class: the class the run's numbers score (ptz-detect's own comes from its arguments).
 inline std::unique_ptr<Listener> runLoop(const std::vector<std::string>& sim_args,
                                          const std::vector<std::string>& control_args,
-                                         const std::vector<std::string>& detect_args = {}) {
+                                         const std::vector<std::string>& detect_args = {},
+                                         const std::string& target_class = "red_ball") {
   using namespace std::chrono_literals;
   lcm::LCM lcm(kTestUrl);
   auto l = std::make_unique<Listener>();
+  l->metrics = ptz::tools::RunMetrics(target_class);
   lcm.subscribe("SIM_TRUTH", &Listener::onTruth, l.get());
   lcm.subscribe("OBJECT_POSE", &Listener::onPose, l.get());
   lcm.subscribe("PTZ_SETPOINT", &Listener::onSetpoint, l.get());

@@ -1,5 +1,6 @@
 // Process replay: the committed log of a 2 s closed-loop run (JPEG frames) replayed through a
-// fresh ptz-detect gives bit-identical poses; a change in perception is noticed.
+// fresh ptz-detect gives bit-identical poses and tracks; a change in perception, or in the
+// tracker alone, is noticed.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -10,6 +11,7 @@
 
 #include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "support/child_process.hpp"
 #include "tools/logs/log_reader.hpp"
 
@@ -21,19 +23,37 @@ namespace {
 const std::string kFixture = PTZ_SOURCE_DIR "/test/fixtures/closed_loop_2s.lcmlog";
 constexpr const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
-std::map<int64_t, ptzstereo::object_pose_t> poses(const std::string& path, int64_t* frames) {
-  std::map<int64_t, ptzstereo::object_pose_t> out;
+template <typename Message>
+std::map<int64_t, Message> read(const std::string& path, const std::string& channel,
+                                int64_t* frames) {
+  std::map<int64_t, Message> out;
   ptz::tools::LogReader reader(path);
   *frames = 0;
   while (const lcm::LogEvent* ev = reader.next()) {
     if (ev->channel == "STEREO_FRAME") ++*frames;
-    ptzstereo::object_pose_t p;
-    if (ev->channel == "OBJECT_POSE" && p.decode(ev->data, 0, ev->datalen) >= 0) {
-      out[p.frame_seq] = p;
-    }
+    Message m;
+    if (ev->channel == channel && m.decode(ev->data, 0, ev->datalen) >= 0) out[m.frame_seq] = m;
   }
   EXPECT_TRUE(reader.breaks().empty()) << reader.describeBreaks();
   return out;
+}
+
+std::map<int64_t, ptzstereo::object_pose_t> poses(const std::string& path, int64_t* frames) {
+  return read<ptzstereo::object_pose_t>(path, "OBJECT_POSE", frames);
+}
+
+std::map<int64_t, ptzstereo::object_tracks_t> tracks(const std::string& path) {
+  int64_t frames = 0;
+  return read<ptzstereo::object_tracks_t>(path, "OBJECT_TRACKS", &frames);
+}
+
+// Both messages' bytes, publish time aside.
+template <typename Message>
+std::vector<uint8_t> canonical(Message m) {
+  m.publish_utime = 0;
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
 }
 
 // Runs ptz-detect (with extra flags) and ptz-replay --check; returns replay's exit code.
@@ -77,6 +97,42 @@ TEST(Replay, TheCommittedRunReplaysBitIdentically) {
   EXPECT_EQ(targets, frames - 2);
   EXPECT_LT(logged.begin()->second.target_index, 0);
   EXPECT_LT(std::next(logged.begin())->second.target_index, 0);
+  // The tracks of every frame too: the ball's one track, its velocity and covariance.
+  const auto logged_tracks = tracks(kFixture), replayed_tracks = tracks(out);
+  ASSERT_EQ(static_cast<int64_t>(logged_tracks.size()), frames);
+  ASSERT_EQ(replayed_tracks.size(), logged_tracks.size());
+  for (const auto& [seq, l] : logged_tracks) {
+    EXPECT_EQ(canonical(replayed_tracks.at(seq)), canonical(l)) << "frame " << seq;
+  }
+  EXPECT_GE(logged_tracks.rbegin()->second.num_tracks, 1);
+}
+
+TEST(Replay, AChangeInTheTrackerAloneIsNoticed) {
+  // Ten times the jerk density: other velocities and covariances, the same measured positions
+  // and targets (what else a pose says may follow the tracks: which regions are trusted).
+  const std::string out = std::string(::testing::TempDir()) + "/tracker_changed.lcmlog";
+  EXPECT_EQ(replay({"--track-jerk-psd-m2-s5", "50"}, out), 1);
+  int64_t frames = 0;
+  const auto logged = poses(kFixture, &frames), replayed = poses(out, &frames);
+  ASSERT_EQ(replayed.size(), logged.size());
+  for (const auto& [seq, l] : logged) {
+    const auto& r = replayed.at(seq);
+    ASSERT_EQ(r.num_objects, l.num_objects) << "frame " << seq;
+    EXPECT_EQ(r.target_index, l.target_index) << "frame " << seq;
+    for (size_t i = 0; i < l.objects.size(); ++i) {
+      EXPECT_EQ(std::memcmp(r.objects[i].position_m, l.objects[i].position_m,
+                            sizeof(l.objects[i].position_m)),
+                0)
+          << "frame " << seq << " object " << i;
+    }
+  }
+  const auto logged_tracks = tracks(kFixture), replayed_tracks = tracks(out);
+  ASSERT_EQ(replayed_tracks.size(), logged_tracks.size());
+  int64_t different = 0;
+  for (const auto& [seq, l] : logged_tracks) {
+    different += canonical(replayed_tracks.at(seq)) != canonical(l);
+  }
+  EXPECT_GE(different, frames / 2);
 }
 
 TEST(Replay, AChangeInPerceptionIsNoticed) {

@@ -41,13 +41,25 @@ const std::map<std::string, std::function<double(const RunSummary&)>>& fields() 
       {"time_to_acquire_s", [](const RunSummary& s) { return s.time_to_acquire_s; }},
       {"search_time_s", [](const RunSummary& s) { return s.search_time_s; }},
       {"coast_time_s", [](const RunSummary& s) { return s.coast_time_s; }},
+      {"reappearances", [](const RunSummary& s) { return static_cast<double>(s.reappearances); }},
+      {"reacquire_max_s", [](const RunSummary& s) { return s.reacquire_max_s; }},
+      {"orientation_error_rms_deg",
+       [](const RunSummary& s) { return s.orientation_error_rms_deg; }},
+      {"orientation_samples",
+       [](const RunSummary& s) { return static_cast<double>(s.orientation_samples); }},
   };
   return f;
 }
 
+// A scenario's arguments; a leading "${source}/" is the source tree (config files by path).
 std::vector<std::string> strings(const cv::FileNode& n) {
+  static const std::string kSource = "${source}/";
   std::vector<std::string> out;
-  for (const auto& item : n) out.push_back(static_cast<std::string>(item));
+  for (const auto& item : n) {
+    std::string arg = static_cast<std::string>(item);
+    if (arg.rfind(kSource, 0) == 0) arg = PTZ_SOURCE_DIR "/" + arg.substr(kSource.size());
+    out.push_back(arg);
+  }
   return out;
 }
 
@@ -69,9 +81,16 @@ void runScenario(const std::string& path) {
   }
   std::printf("scenario %s: %s\n", std::filesystem::path(path).stem().c_str(),
               static_cast<std::string>(scenario["description"]).c_str());
+  std::vector<std::string> sim_args = {"--config", path, "--encoding", "jpeg"};
+  for (const std::string& a : strings(scenario["sim_args"])) sim_args.push_back(a);
+  // The class to follow and score (ptz-detect's --target-class too); the ball's by default.
+  const std::string target_class = scenario["target_class"].empty()
+                                       ? "red_ball"
+                                       : static_cast<std::string>(scenario["target_class"]);
+  std::vector<std::string> detect_args = {"--target-class", target_class};
+  for (const std::string& a : strings(scenario["detect_args"])) detect_args.push_back(a);
   auto run =
-      ptz::test::runLoop({"--config", path, "--encoding", "jpeg"},
-                         strings(scenario["control_args"]), strings(scenario["detect_args"]));
+      ptz::test::runLoop(sim_args, strings(scenario["control_args"]), detect_args, target_class);
   const RunSummary s = run->metrics.summary();
   std::printf("%s", s.toJson().c_str());
   EXPECT_EQ(run->counters["ptz-sim"]["lockstep_timeouts"], 0);

@@ -6,11 +6,16 @@
 #include <limits>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
 #include "common/rig.hpp"
 #include "common/transport.hpp"
 
 namespace ptz::tools {
 namespace {
+
+// A share of an object's pixels that counts as all of them (antialiased edges, rounding).
+constexpr double kFullyVisible = 0.98;
 
 CameraView toView(const ptzstereo::camera_model_t& m) {
   CameraView v;
@@ -63,6 +68,25 @@ double rms(const std::vector<double>& v) {
   return std::sqrt(s / v.size());
 }
 
+// The angle of the rotation between two unit quaternions (w, x, y, z), of a box symmetric under
+// turns by 90 degrees about its own y axis: the smallest over those turns, degrees. NaN when
+// either is not a finite, non-zero quaternion.
+double boxOrientationErrorDeg(const std::array<double, 4>& estimate,
+                              const std::array<double, 4>& truth) {
+  const Eigen::Quaterniond e(estimate[0], estimate[1], estimate[2], estimate[3]);
+  const Eigen::Quaterniond t(truth[0], truth[1], truth[2], truth[3]);
+  if (!e.coeffs().allFinite() || !t.coeffs().allFinite() || e.norm() < 1e-9 || t.norm() < 1e-9) {
+    return NAN;
+  }
+  double best = INFINITY;
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Quaterniond sym(Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitY()));
+    const Eigen::Quaterniond d = (t.normalized() * sym).conjugate() * e.normalized();
+    best = std::min(best, 2 * std::atan2(d.vec().norm(), std::abs(d.w())));
+  }
+  return best * 180 / M_PI;
+}
+
 std::string number(double v) {
   if (!std::isfinite(v)) return "null";
   std::ostringstream s;
@@ -76,8 +100,8 @@ std::string number(double v) {
 struct RunMetrics::Scored {
   std::map<int64_t, FrameScore> frames;
   std::map<int64_t, std::vector<double>> centring;
-  std::vector<double> error_m, error_pct;
-  int64_t outside = 0, switches = 0;
+  std::vector<double> error_m, error_pct, reacquire_s, orientation_error_deg;
+  int64_t outside = 0, switches = 0, reappearances = 0;
   int64_t first_utime = 0;
   double period_s = 0;  // 0: unknown
 };
@@ -110,15 +134,26 @@ void RunMetrics::onTruth(const ptzstereo::sim_truth_t& m) {
     t.name = intern(o.name);
     t.class_name = intern(o.class_name);
     t.position_m = {o.position_m[0], o.position_m[1], o.position_m[2]};
+    t.box = o.shape == "box";
+    for (int i = 0; i < 4; ++i) t.orientation_wxyz[static_cast<size_t>(i)] = o.orientation_wxyz[i];
     const Eigen::Vector3d p(o.position_m[0], o.position_m[1], o.position_m[2]);
-    t.in_front = t.inside = true;
+    t.in_front = t.inside = t.fully_visible = true;
     for (int cam = 0; cam < 2; ++cam) {
       bool inside = false;
-      t.in_front &= offsetFromCentre(views[cam], p, &t.offset_px[2 * cam],
-                                     &t.offset_px[2 * cam + 1], &inside);
+      const double dx_limit_px = (views[cam].width - 1) / 2.0;
+      const double dy_limit_px = (views[cam].height - 1) / 2.0;
+      double& dx = t.offset_px[2 * cam];
+      double& dy = t.offset_px[2 * cam + 1];
+      t.in_front &= offsetFromCentre(views[cam], p, &dx, &dy, &inside);
       t.inside &= inside;
+      // The apparent radius at its depth (pinhole): the whole disk inside the image.
+      const double z_m = views[cam].toCamera(p).z();
+      const double r_px = z_m > 0 ? views[cam].intrinsics.fx * o.radius_m / z_m : INFINITY;
+      t.fully_visible &= inside && o.visible_fraction[cam] >= kFullyVisible &&
+                         std::abs(dx) + r_px <= dx_limit_px && std::abs(dy) + r_px <= dy_limit_px;
     }
     t.inside &= t.in_front;
+    t.fully_visible &= t.inside;
     objects.push_back(t);
   }
   truth_.emplace(m.frame_seq, std::move(objects));
@@ -138,6 +173,8 @@ void RunMetrics::onPose(const ptzstereo::object_pose_t& m) {
     p.estimate_m = {o.position_m[0], o.position_m[1], o.position_m[2]};
     p.finite = std::all_of(p.estimate_m.begin(), p.estimate_m.end(),
                            [](double v) { return std::isfinite(v); });
+    p.has_orientation = o.has_orientation;
+    for (int i = 0; i < 4; ++i) p.orientation_wxyz[static_cast<size_t>(i)] = o.orientation_wxyz[i];
   }
   pose_.emplace(m.frame_seq, p);
 }
@@ -193,8 +230,13 @@ RunMetrics::Scored RunMetrics::score() const {
     }
     return static_cast<const TruthObject*>(nullptr);
   };
-  int tracked = -1;  // name of the true object last tracked
+  int tracked = -1;              // name of the true object last tracked
+  int watched = -1;              // the object whose visibility is followed
+  bool hidden = false;           // it, since it was last fully visible
+  bool pending = false;          // fully visible again, not yet the target
+  int64_t reappeared_utime = 0;  // since then
   for (const auto& [seq, utime] : frame_utime_) {
+    bool on_tracked = false;  // this frame's pose has the tracked object as its target
     FrameScore& f = s.frames[seq];
     f.utime = utime;
     if (auto c = control_state_.find(seq); c != control_state_.end()) f.control_state = c->second;
@@ -212,9 +254,40 @@ RunMetrics::Scored RunMetrics::score() const {
         const double range_m = std::hypot(o->position_m[0], o->position_m[1], o->position_m[2]);
         s.error_m.push_back(err_m);
         if (range_m > 0) s.error_pct.push_back(100 * err_m / range_m);
+        if (o->box && p->second.has_orientation) {
+          const double e = boxOrientationErrorDeg(p->second.orientation_wxyz, o->orientation_wxyz);
+          if (std::isfinite(e)) s.orientation_error_deg.push_back(e);
+        }
         if (tracked >= 0 && o->name != tracked) ++s.switches;
         tracked = o->name;
+        on_tracked = true;
       }
+    }
+    // Re-acquisition: from the frame the tracked object is fully visible again to its first pose.
+    if (watched != tracked) {  // another object: its own story
+      watched = tracked;
+      hidden = false;
+      pending = false;
+    }
+    const TruthObject* seen = nullptr;
+    for (size_t i = 0; objects && tracked >= 0 && i < objects->size(); ++i) {
+      if ((*objects)[i].name == tracked) seen = &(*objects)[i];
+    }
+    if (seen && !seen->fully_visible) {
+      if (pending) {  // hidden again before it was re-acquired
+        s.reacquire_s.push_back(secondsBetween(reappeared_utime, utime));
+        pending = false;
+      }
+      hidden = true;
+    } else if (seen && hidden) {
+      hidden = false;
+      ++s.reappearances;
+      pending = true;
+      reappeared_utime = utime;
+    }
+    if (pending && on_tracked) {
+      s.reacquire_s.push_back(secondsBetween(reappeared_utime, utime));
+      pending = false;
     }
     if (!objects || secondsBetween(s.first_utime, utime) < settle_s_) continue;
     // Centring of the object being tracked; before the first acquisition, the target class's.
@@ -232,6 +305,9 @@ RunMetrics::Scored RunMetrics::score() const {
     }
     s.centring[seq].assign(o->offset_px.begin(), o->offset_px.end());
     if (!o->inside) ++s.outside;
+  }
+  if (pending) {  // never re-acquired: at least as long as it stayed visible
+    s.reacquire_s.push_back(secondsBetween(reappeared_utime, s.frames.rbegin()->second.utime));
   }
   return s;
 }
@@ -289,7 +365,13 @@ RunSummary RunMetrics::summary() const {
     s.position_error_max_pct_of_range = *std::max_element(sc.error_pct.begin(), sc.error_pct.end());
   }
   s.position_samples = static_cast<int64_t>(sc.error_m.size());
+  s.orientation_error_rms_deg = rms(sc.orientation_error_deg);
+  s.orientation_samples = static_cast<int64_t>(sc.orientation_error_deg.size());
   s.target_switches = sc.switches;
+  s.reappearances = sc.reappearances;
+  if (!sc.reacquire_s.empty()) {
+    s.reacquire_max_s = *std::max_element(sc.reacquire_s.begin(), sc.reacquire_s.end());
+  }
   const int64_t frames = s.frames_published;
   int64_t with_target = 0;
   for (const auto& [seq, p] : pose_) {
@@ -333,6 +415,8 @@ std::string RunSummary::toJson() const {
     << "  \"position_error_rms_m\": " << number(position_error_rms_m) << ",\n"
     << "  \"position_error_rms_pct_of_range\": " << number(position_error_rms_pct_of_range) << ",\n"
     << "  \"position_error_max_pct_of_range\": " << number(position_error_max_pct_of_range) << ",\n"
+    << "  \"orientation_error_rms_deg\": " << number(orientation_error_rms_deg) << ",\n"
+    << "  \"orientation_samples\": " << orientation_samples << ",\n"
     << "  \"target_lost_s\": " << number(target_lost_s) << ",\n"
     << "  \"poses_without_target\": " << poses_without_target << ",\n"
     << "  \"frames_without_pose\": " << frames_without_pose << ",\n"
@@ -340,6 +424,8 @@ std::string RunSummary::toJson() const {
     << "  \"search_time_s\": " << number(search_time_s) << ",\n"
     << "  \"coast_time_s\": " << number(coast_time_s) << ",\n"
     << "  \"target_switches\": " << target_switches << ",\n"
+    << "  \"reappearances\": " << reappearances << ",\n"
+    << "  \"reacquire_max_s\": " << number(reacquire_max_s) << ",\n"
     << "  \"frames_skipped_late\": " << frames_skipped_late << "\n"
     << "}\n";
   return j.str();

@@ -51,9 +51,20 @@ struct RunSummary {
   double coast_time_s = NAN;
   // Frames with a target whose tracked true object is not that of the previous such frame.
   int64_t target_switches = 0;
+  // The tracked true object fully visible again (SIM_TRUTH: at least 98 % of its pixels not
+  // hidden, the whole disk of its radius inside both images) after it was not, since its first
+  // acquisition: how often, and the longest time from then to the first pose with it as the target
+  // (where that never came, the time it stayed fully visible; NaN: it was never hidden).
+  int64_t reappearances = 0;
+  double reacquire_max_s = NAN;
   int64_t frames_skipped_late = 0;  // by the simulator, running late (realtime)
   int64_t centering_samples = 0;
   int64_t position_samples = 0;
+  // OBJECT_POSE target's orientation vs the tracked true object's (SIM_TRUTH), a box's taken
+  // modulo its symmetry (turns by 90 degrees about its vertical axis: a square footprint): the
+  // angle of the rotation between them, over the poses that have one and a box as the truth.
+  double orientation_error_rms_deg = NAN;
+  int64_t orientation_samples = 0;
 
   std::string toJson() const;
 };
@@ -93,9 +104,12 @@ class RunMetrics {
   struct TruthObject {
     int name = -1, class_name = -1;  // into names_
     std::array<double, 3> position_m{};
-    bool in_front = false;  // of both cameras
-    bool inside = false;    // of both images
+    bool in_front = false;       // of both cameras
+    bool inside = false;         // of both images
+    bool fully_visible = false;  // none of it hidden, all of it inside both images
     std::array<double, 4> offset_px{};
+    bool box = false;  // its shape: a box has an orientation
+    std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   };
   struct Pose {
     int64_t utime = 0;
@@ -103,6 +117,8 @@ class RunMetrics {
     bool finite = false;  // the target's estimate is a number
     int class_name = -1;
     std::array<double, 3> estimate_m{};
+    bool has_orientation = false;
+    std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   };
   struct Scored;
   Scored score() const;

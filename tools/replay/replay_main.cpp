@@ -1,8 +1,9 @@
 // ptz-replay: process replay. Publishes every STEREO_FRAME of a recorded log, one at a time,
 // to the real ptz-detect (started beforehand, e.g. by scripts/replay) and waits for the
-// OBJECT_POSE that answers it before the next frame, so nothing is dropped and the replay runs
-// as fast as detection. Each replayed pose is compared with the logged one of the same frame:
-// byte for byte once publish_utime (wall clock) is set aside. --check: exit 1 on a difference;
+// OBJECT_POSE (and, where the log has them, the OBJECT_TRACKS) that answer it before the next
+// frame, so nothing is dropped and the replay runs as fast as detection. Each replayed message is
+// compared with the logged one of the same frame: byte for byte once publish_utime (wall clock)
+// is set aside. --check: exit 1 on a difference;
 // 3 when frames went unanswered (no ptz-detect, or it dropped them). A missing, empty or foreign
 // log, or one without frames, has its own exit code (tools/logs/log_reader.hpp); --out is
 // written under a temporary name and kept only when every frame was replayed.
@@ -14,22 +15,30 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/freshness.hpp"
 #include "common/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "tools/logs/log_reader.hpp"
 
 namespace {
 
-// The pose's bytes without its publish time: what must be identical between runs.
-std::vector<uint8_t> canonical(ptzstereo::object_pose_t pose) {
-  pose.publish_utime = 0;
-  std::vector<uint8_t> bytes(static_cast<size_t>(pose.getEncodedSize()));
-  pose.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+template <typename Message>
+std::vector<uint8_t> encoded(const Message& m) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
+}
+
+// The bytes without the publish time: what must be identical between runs.
+template <typename Message>
+std::vector<uint8_t> canonical(Message m) {
+  m.publish_utime = 0;
+  return encoded(m);
 }
 
 double largestPositionChange(const ptzstereo::object_pose_t& a, const ptzstereo::object_pose_t& b) {
@@ -43,16 +52,68 @@ double largestPositionChange(const ptzstereo::object_pose_t& a, const ptzstereo:
   return worst;
 }
 
-struct Replies {
-  std::map<int64_t, ptzstereo::object_pose_t> poses;  // by frame_seq
-  bool detect_up = false;
-  // Checked before it is decoded (a pose with a hostile count must not make the replay allocate).
-  void onPose(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    ptzstereo::object_pose_t m;
-    if (ptz::decodeChecked(rbuf->data, rbuf->data_size, &m, nullptr)) poses[m.frame_seq] = m;
+// One of ptz-detect's answers to a frame: the logged ones, the replayed ones, by frame_seq.
+template <typename Message>
+struct Answers {
+  explicit Answers(std::string name) : what(std::move(name)) {}
+  std::string what;  // "pose", "tracks"
+  std::map<int64_t, Message> logged, replies, replayed;
+  int64_t identical = 0, different = 0, not_logged = 0;
+  // Checked before it is decoded (a hostile count must not make the replay allocate).
+  void onReply(const lcm::ReceiveBuffer* rbuf, const std::string&) {
+    Message m;
+    if (ptz::decodeChecked(rbuf->data, rbuf->data_size, &m, nullptr)) replies[m.frame_seq] = m;
   }
-  void onStatus(const lcm::ReceiveBuffer*, const std::string&) { detect_up = true; }
+  // The reply to frame seq, stamped with the frame's logged capture time, kept for the end.
+  Message* take(int64_t seq, int64_t logged_utime) {
+    auto it = replies.find(seq);
+    if (it == replies.end()) return nullptr;
+    it->second.utime = logged_utime;
+    Message* kept = &(replayed[seq] = it->second);
+    replies.erase(replies.begin(), replies.upper_bound(seq));
+    return kept;
+  }
+  void compare() {
+    for (const auto& [seq, r] : replayed) {
+      const auto it = logged.find(seq);
+      if (it == logged.end()) {
+        ++not_logged;
+      } else if (canonical(it->second) == canonical(r)) {
+        ++identical;
+      } else {
+        ++different;
+        report(seq, it->second, r);
+      }
+    }
+  }
+  void report(int64_t seq, const Message&, const Message&) const {
+    std::fprintf(stderr, "ptz-replay: frame %lld: %s differs\n", static_cast<long long>(seq),
+                 what.c_str());
+  }
 };
+
+template <>
+void Answers<ptzstereo::object_pose_t>::report(int64_t seq, const ptzstereo::object_pose_t& a,
+                                               const ptzstereo::object_pose_t& b) const {
+  std::fprintf(stderr, "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
+               static_cast<long long>(seq), largestPositionChange(a, b));
+}
+
+void noteUp(const lcm::ReceiveBuffer*, const std::string&, bool* up) {
+  *up = true;
+}
+
+template <typename Message>
+void writeEvent(lcm::LogFile* out, int64_t eventnum, const char* channel, const Message& m) {
+  std::vector<uint8_t> bytes = encoded(m);
+  lcm::LogEvent e{};
+  e.eventnum = eventnum;
+  e.timestamp = m.publish_utime;
+  e.channel = channel;
+  e.datalen = static_cast<int32_t>(bytes.size());
+  e.data = bytes.data();
+  out->writeEvent(&e);
+}
 
 // The replay; returns the exit code. Throws LogError for a log it cannot use.
 int replay(const ptz::Params& params, lcm::LCM& lcm) {
@@ -73,9 +134,14 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
   const std::string in_prefix = params.getString("log_channel_prefix");
   const auto timeout =
       std::chrono::milliseconds(static_cast<int64_t>(params.getDouble("timeout_s") * 1000));
-  Replies replies;
-  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose), &Replies::onPose, &replies);
-  lcm.subscribe(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &Replies::onStatus, &replies);
+  Answers<ptzstereo::object_pose_t> poses("pose");
+  Answers<ptzstereo::object_tracks_t> tracks("tracks");
+  bool detect_up = false;
+  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose),
+                &Answers<ptzstereo::object_pose_t>::onReply, &poses);
+  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectTracks),
+                &Answers<ptzstereo::object_tracks_t>::onReply, &tracks);
+  lcm.subscribeFunction(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &noteUp, &detect_up);
   auto waitFor = [&](auto done) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (!done() && std::chrono::steady_clock::now() < deadline &&
@@ -84,18 +150,22 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
     }
     return done();
   };
-  // One pass: frames are replayed as they come, the logged poses (which follow their
-  // frames in the log) are collected, and the two compared at the end.
-  int64_t frames = 0, identical = 0, different = 0, unanswered = 0, not_logged = 0, undecodable = 0;
-  double worst_m = 0;
-  std::map<int64_t, ptzstereo::object_pose_t> logged, replayed_by_seq;
+  // One pass: frames are replayed as they come, the logged answers (which follow their frames in
+  // the log) are collected, and the two compared at the end (older logs have no tracks: counted).
+  int64_t frames = 0, unanswered = 0, undecodable = 0;
   const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
   while (const lcm::LogEvent* ev = reader.next()) {
     if (ptz::StopFlag::stopRequested()) break;
     ptzstereo::object_pose_t logged_pose;
     if (ev->channel == in_prefix + ptz::channels::kObjectPose &&
         ptz::tools::decodeEvent(*ev, &logged_pose, &undecodable)) {
-      logged[logged_pose.frame_seq] = logged_pose;
+      poses.logged[logged_pose.frame_seq] = logged_pose;
+      continue;
+    }
+    ptzstereo::object_tracks_t logged_tracks;
+    if (ev->channel == in_prefix + ptz::channels::kObjectTracks &&
+        ptz::tools::decodeEvent(*ev, &logged_tracks, &undecodable)) {
+      tracks.logged[logged_tracks.frame_seq] = logged_tracks;
       continue;
     }
     ptzstereo::stereo_frame_t frame;
@@ -104,7 +174,7 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
       continue;
     }
     // ptz-detect is waited for at the first frame: a log without frames is its own error.
-    if (frames == 0 && !waitFor([&] { return replies.detect_up; })) {
+    if (frames == 0 && !waitFor([&] { return detect_up; })) {
       std::fprintf(stderr, "ptz-replay: ptz-detect is not running on this LCM network (no %s)\n",
                    ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT").c_str());
       return ptz::tools::log_exit::kUnanswered;
@@ -119,27 +189,24 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
     }
     frame.publish_utime = now_utime;
     lcm.publish(frame_channel, &frame);
-    if (!waitFor([&] { return replies.poses.count(frame.seq) > 0; })) {
+    const bool answered = waitFor(
+        [&] { return poses.replies.count(frame.seq) > 0 && tracks.replies.count(frame.seq) > 0; });
+    if (!answered) {
       ++unanswered;
-      std::fprintf(stderr, "ptz-replay: no pose for frame %lld within the timeout\n",
+      std::fprintf(stderr, "ptz-replay: no %s for frame %lld within the timeout\n",
+                   poses.replies.count(frame.seq) ? "tracks" : "pose",
                    static_cast<long long>(frame.seq));
-      continue;
+      continue;  // a half answer is not compared
     }
-    ptzstereo::object_pose_t& replayed = replies.poses[frame.seq];
-    replayed.utime = logged_utime;  // the frame's own capture time, as the log has it
+    // The frame's own capture time, as the log has it.
+    const auto* pose = poses.take(frame.seq, logged_utime);
+    const auto* frame_tracks = tracks.take(frame.seq, logged_utime);
     if (out) {
-      std::vector<uint8_t> bytes(static_cast<size_t>(replayed.getEncodedSize()));
-      replayed.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-      lcm::LogEvent e{};
-      e.eventnum = frames - 1;
-      e.timestamp = replayed.publish_utime;
-      e.channel = ptz::channels::kObjectPose;
-      e.datalen = static_cast<int32_t>(bytes.size());
-      e.data = bytes.data();
-      out->writeEvent(&e);
+      writeEvent(out.get(), 2 * (frames - 1), ptz::channels::kObjectPose, *pose);
+      if (frame_tracks) {
+        writeEvent(out.get(), 2 * frames - 1, ptz::channels::kObjectTracks, *frame_tracks);
+      }
     }
-    replayed_by_seq[frame.seq] = replayed;
-    replies.poses.erase(replies.poses.begin(), replies.poses.upper_bound(frame.seq));
   }
   if (ptz::StopFlag::stopRequested()) {
     std::fprintf(stderr, "ptz-replay: stopped (signal) after %lld frames; no --out written\n",
@@ -152,20 +219,8 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
     throw ptz::tools::LogError(ptz::tools::log_exit::kNoChannels,
                                "log '" + path + "': no STEREO_FRAME in it decodes");
   }
-  for (const auto& [seq, replayed] : replayed_by_seq) {
-    const auto it = logged.find(seq);
-    if (it == logged.end()) {
-      ++not_logged;
-    } else if (canonical(it->second) == canonical(replayed)) {
-      ++identical;
-    } else {
-      ++different;
-      const double change = largestPositionChange(it->second, replayed);
-      worst_m = std::max(worst_m, change);
-      std::fprintf(stderr, "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
-                   static_cast<long long>(seq), change);
-    }
-  }
+  poses.compare();
+  tracks.compare();
   if (undecodable) {
     std::fprintf(stderr, "ptz-replay: %lld undecodable messages in the log\n",
                  static_cast<long long>(undecodable));
@@ -176,16 +231,18 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
                  reader.describeBreaks().c_str());
   }
   std::printf(
-      "replayed %lld frames: %lld poses identical to the log, %lld different (largest "
-      "position change %g m), %lld unanswered, %lld without a logged pose\n",
-      static_cast<long long>(frames), static_cast<long long>(identical),
-      static_cast<long long>(different), worst_m, static_cast<long long>(unanswered),
-      static_cast<long long>(not_logged));
+      "replayed %lld frames: %lld poses identical to the log, %lld different, %lld without a "
+      "logged pose; %lld tracks identical, %lld different, %lld without logged tracks; %lld "
+      "frames unanswered\n",
+      static_cast<long long>(frames), static_cast<long long>(poses.identical),
+      static_cast<long long>(poses.different), static_cast<long long>(poses.not_logged),
+      static_cast<long long>(tracks.identical), static_cast<long long>(tracks.different),
+      static_cast<long long>(tracks.not_logged), static_cast<long long>(unanswered));
   const bool check = params.getBool("check");
   int code = kOk;
-  if (check && different > 0) {
+  if (check && poses.different + tracks.different > 0) {
     code = ptz::tools::log_exit::kVerdict;  // perception changed
-  } else if (unanswered > 0 || (check && identical == 0)) {
+  } else if (unanswered > 0 || (check && poses.identical == 0)) {
     code = ptz::tools::log_exit::kUnanswered;  // ptz-detect did not answer
   }
   if (out_file) {
@@ -205,23 +262,23 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
 int main(int argc, char** argv) {
   ptz::Params p("ptz-replay",
                 "Replays the STEREO_FRAME messages of an LCM log through a running ptz-detect, "
-                "one frame at a time, and compares its OBJECT_POSE messages with the logged "
-                "ones.\n" +
+                "one frame at a time, and compares its OBJECT_POSE and OBJECT_TRACKS messages with "
+                "the logged ones.\n" +
                     ptz::tools::logExitCodesHelp(
-                        "--check: a replayed pose differs from the logged one",
+                        "--check: a replayed pose or tracks message differs from the logged one",
                         "frames unanswered (no ptz-detect, or it dropped them; --check: also "
                         "no logged pose to compare), or stopped by a signal"));
   ptz::addTransportParams(p);
   p.add("log", "", "the recorded LCM log (required)");
   p.add("log_channel_prefix", "", "prefix of the channel names in the log");
   p.add("out", "",
-        "write the replayed OBJECT_POSE messages to this LCM log (only when every frame was "
-        "answered)");
+        "write the replayed OBJECT_POSE and OBJECT_TRACKS messages to this LCM log (only when "
+        "every frame was answered)");
   p.add("timeout_s", 5.0, "s", "wait this long for each answer (and for ptz-detect to be up)",
         ptz::Range::above(0));
   p.add("check", false,
-        "exit 1 when a replayed pose differs from the logged one (3 when frames are unanswered, "
-        "with or without it)");
+        "exit 1 when a replayed pose or tracks message differs from the logged one (3 when "
+        "frames are unanswered, with or without it)");
   // Not runProcess: its exit codes (1 for an LCM that does not open) are not these.
   try {
     if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;

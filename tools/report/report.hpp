@@ -48,6 +48,15 @@ struct ReportData {
     int32_t tracks;
   };
   std::vector<TargetTrack> target_tracks;
+  // Every live track of every OBJECT_TRACKS (the first kMaxTracksPlotted of each): its id and
+  // state (object_track_t::STATE_*) over time.
+  static constexpr size_t kMaxTracksPlotted = 16;
+  struct TrackPoint {
+    double t_s;
+    int64_t id;
+    int state;
+  };
+  std::vector<TrackPoint> track_points;
   // ptz-control's state (CONTROL_STATE, control_state_t::STATE_*) per setpoint.
   struct Control {
     double t_s;

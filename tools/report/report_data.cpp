@@ -29,6 +29,7 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
   std::map<int64_t, ptzstereo::object_detections_t> detections;
   std::vector<ptzstereo::object_pose_t> poses;
   std::vector<ptzstereo::object_tracks_t> tracks;  // without their tracks: the target and count
+  std::vector<std::pair<int64_t, ptzstereo::object_track_t>> track_points;  // utime, id, state
   std::vector<ptzstereo::control_state_t> control;
   std::vector<ptzstereo::ptz_setpoint_t> setpoints;
   std::vector<int64_t> frame_periods_us;
@@ -87,6 +88,12 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
     } else if (ch == px + channels::kObjectTracks) {
       ptzstereo::object_tracks_t m{};
       if (!decodeEvent(*ev, &m, &d.undecodable)) continue;
+      for (size_t i = 0; i < m.tracks.size() && i < ReportData::kMaxTracksPlotted; ++i) {
+        ptzstereo::object_track_t t{};
+        t.id = m.tracks[i].id;
+        t.state = m.tracks[i].state;
+        track_points.emplace_back(m.utime, t);
+      }
       m.tracks.clear();
       tracks.push_back(std::move(m));
     } else if (ch == px + channels::kControlState) {
@@ -175,6 +182,8 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
   };
   for (const auto& m : tracks)
     d.target_tracks.push_back({since_t0_s(m.utime), m.target_id, m.num_tracks});
+  for (const auto& [utime, t] : track_points)
+    d.track_points.push_back({since_t0_s(utime), t.id, t.state});
   for (const auto& m : control) d.control.push_back({since_t0_s(m.utime), m.state, m.target_id});
   // Centring: the tracked true object when the simulator's truth is logged, else the detections.
   const std::map<int64_t, FrameScore> scored = series_metrics.frames();

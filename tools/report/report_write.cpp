@@ -97,10 +97,16 @@ std::string gnuplotScript(const ReportData& d) {
       << "set multiplot layout " << panels << ",1 title 'The target track and the controller "
       << "state'\nset xlabel 'time (s)'\nset lmargin at screen 0.11\n";
     if (!d.target_tracks.empty()) {
+      // The target a wide line; each live track a dot on it at its id, coloured by its state.
       g << "set ylabel 'track id (-1: none)'\nplot " << q
-        << "target.csv' using 1:2 skip 1 with steps lw 2 lc rgb '#d62728' title 'target "
+        << "target.csv' using 1:2 skip 1 with steps lw 6 lc rgb '#f4a6a6' title 'target "
         << "(OBJECT_TRACKS)', " << q
-        << "target.csv' using 1:3 skip 1 with steps dt 2 lc rgb '#7f7f7f' title 'live tracks'\n";
+        << "target.csv' using 1:3 skip 1 with steps dt 2 lc rgb '#7f7f7f' title 'live tracks', "
+        << q << "tracks.csv' using 1:2:($3 == 0 ? 0xaaaaaa : $3 == 1 ? 0x2ca02c : 0xff7f0e) "
+        << "skip 1 with points pt 7 ps 0.4 lc rgb variable notitle, "
+        << "NaN with points pt 7 lc rgb '#aaaaaa' title 'tentative', "
+        << "NaN with points pt 7 lc rgb '#2ca02c' title 'confirmed', "
+        << "NaN with points pt 7 lc rgb '#ff7f0e' title 'coasting'\n";
     }
     if (!d.control.empty()) {
       g << "set ylabel 'ptz-control state'\nset yrange [-0.5:4.5]\n"
@@ -223,6 +229,10 @@ std::vector<std::string> writeReport(const ReportData& d, const std::string& log
     for (const auto& t : d.target_tracks)
       f << t.t_s << "," << t.target_id << "," << t.tracks << "\n";
     files.push_back("target.csv");
+    auto points = open(dir + "/tracks.csv");
+    points << "t_s,track_id,state\n";
+    for (const auto& p : d.track_points) points << p.t_s << "," << p.id << "," << p.state << "\n";
+    files.push_back("tracks.csv");
   }
   if (!d.control.empty()) {
     auto f = open(dir + "/control_state.csv");

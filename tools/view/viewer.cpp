@@ -151,9 +151,10 @@ void drawTracks(cv::Mat* image, const CameraView& view, const ptzstereo::object_
 std::string controlLine(const ViewInput& in) {
   if (!in.control) return "control: no state yet";
   const auto& s = *in.control;
-  std::string line = "control " + controlStateText(s) + "   ";
-  line += s.target_id >= 0 ? "target #" + std::to_string(s.target_id) : std::string("no target");
-  return line + ": " + s.reason;
+  // Without a target the reason says so ("no target: searching ...").
+  const std::string line = "control " + controlStateText(s) + "   ";
+  if (s.target_id < 0) return line + (s.reason.empty() ? "no target" : s.reason);
+  return line + "target #" + std::to_string(s.target_id) + ": " + s.reason;
 }
 
 std::string tracksLine(const ViewInput& in) {
@@ -164,8 +165,9 @@ std::string tracksLine(const ViewInput& in) {
   if (m.tracks.size() > static_cast<size_t>(kMaxTracksDrawn)) {
     line += " (" + std::to_string(kMaxTracksDrawn) + " drawn)";
   }
-  line += m.target_id >= 0 ? "   target #" + std::to_string(m.target_id) : "   no target";
-  return line + ": " + m.target_reason;
+  if (m.target_id < 0)
+    return line + "   " + (m.target_reason.empty() ? "no target" : m.target_reason);
+  return line + "   target #" + std::to_string(m.target_id) + ": " + m.target_reason;
 }
 
 }  // namespace

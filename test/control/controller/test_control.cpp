@@ -173,3 +173,96 @@ TEST(Controller, ImplausibleTargetsAreIgnoredAndLimitsHold) {
   EXPECT_GE(sp[0].zoom, 1.0);
   EXPECT_LE(sp[0].zoom, params.max_zoom);
 }
+
+namespace {
+
+// A still target followed as track `id` for a second, then seen 0.8 m away as track `next_id`.
+struct Jump {
+  std::array<PtzPose, 2> setpoint{};
+  int64_t outliers = 0;
+};
+Jump jumpTo(const std::string& mode, int64_t next_id) {
+  const StereoRig rig = StereoRig::makeDefault();
+  auto params = fast();
+  params.mode = mode;
+  params.zoom_mode = "hold";
+  control::Controller c(rig, params);
+  const Eigen::Vector3d here(0.0, 0.0, 3.0), there(0.8, 0.0, 3.0);
+  std::array<PtzPose, 2> sp{PtzPose{0, 0, 1}, PtzPose{0, 0, 1}};
+  for (int k = 0; k < 30; ++k) {
+    control::Observation o{here, 0.1};
+    o.track_id = 7;
+    sp = c.update(k / 30.0, o, sp[0], sp[1]);
+  }
+  control::Observation o{there, 0.1};
+  o.track_id = next_id;
+  Jump j;
+  j.setpoint = c.update(1.0, o, sp[0], sp[1]);
+  j.outliers = c.outliersRejected();
+  return j;
+}
+
+}  // namespace
+
+TEST(Controller, ANewTargetIdStartsTheFiltersAfresh) {
+  // Smith mode: the jump to another track is no outlier of the old track's Kalman filter; the
+  // same track jumping there is (its gate is a few cm wide).
+  EXPECT_EQ(jumpTo("smith", 8).outliers, 0);
+  EXPECT_EQ(jumpTo("smith", 7).outliers, 1);
+  // Track mode (no track velocity: the filtered rate): after the switch the rate starts from
+  // zero, the setpoint is the new target's aim exactly; the same id's jump is a huge "rate".
+  const StereoRig rig = StereoRig::makeDefault();
+  const Aim there = aim(rig, Side::kLeft, Eigen::Vector3d(0.8, 0.0, 3.0), 1);
+  EXPECT_NEAR(jumpTo("track", 8).setpoint[0].pan_rad, there.pan, 1e-9);
+  EXPECT_GT(jumpTo("track", 7).setpoint[0].pan_rad, there.pan + 0.1);
+}
+
+TEST(Controller, ANewTargetSeenFirstCoastingIsAimedAtNotTheOldOnesPrediction) {
+  // The old target moves left at 0.6 m/s; the new one (a hidden track's prediction, to the
+  // right) must start the smith filter: aimed at, not the old target's extrapolation.
+  const StereoRig rig = StereoRig::makeDefault();
+  auto params = fast();
+  params.mode = "smith";
+  params.zoom_mode = "hold";
+  control::Controller c(rig, params);
+  std::array<PtzPose, 2> sp{PtzPose{0, 0, 1}, PtzPose{0, 0, 1}};
+  for (int k = 0; k < 30; ++k) {
+    control::Observation o{Eigen::Vector3d(-0.02 * k, 0.0, 3.0), 0.1};
+    o.track_id = 7;
+    sp = c.update(k / 30.0, o, sp[0], sp[1]);
+  }
+  const double old_pan = sp[0].pan_rad;
+  for (int k = 30; k < 45; ++k) {
+    control::Observation o{Eigen::Vector3d(0.8, 0.0, 3.0), 0.1};
+    o.track_id = 8;
+    o.measured = false;
+    sp = c.update(k / 30.0, o, sp[0], sp[1]);
+  }
+  EXPECT_GT(sp[0].pan_rad, old_pan + 0.05);
+  EXPECT_GT(sp[0].pan_rad, 0.0);
+}
+
+TEST(Controller, ACovarianceThatIsNoCovarianceIsNotUsed) {
+  // Indefinite, asymmetric, huge: each would turn the filter's state to NaN and freeze the heads.
+  const StereoRig rig = StereoRig::makeDefault();
+  for (const char* model : {"ct", "cv"}) {
+    auto params = fast();
+    params.mode = "smith";
+    params.zoom_mode = "hold";
+    params.kf_model = model;
+    control::Controller c(rig, params);
+    std::array<PtzPose, 2> sp{PtzPose{0, 0, 1}, PtzPose{0, 0, 1}};
+    Eigen::Vector3d target;
+    const Eigen::Matrix3d bad[3] = {
+        Eigen::Vector3d(1e-4, -0.9e-4, 1e-4).asDiagonal(),
+        (Eigen::Matrix3d() << 1e-4, 5, 0, 0, 1e-4, 0, 0, 0, 1e-4).finished(),
+        Eigen::Matrix3d::Identity() * 1e308};
+    for (int k = 0; k < 90; ++k) {
+      target = Eigen::Vector3d(0.3 + 0.005 * k, 0.1 * std::sin(k / 5.0), 3.0);
+      control::Observation o{target, 0.1, bad[k % 3]};
+      sp = c.update(k / 30.0, o, sp[0], sp[1]);
+      ASSERT_TRUE(std::isfinite(sp[0].pan_rad) && std::isfinite(sp[1].tilt_rad)) << model << k;
+    }
+    EXPECT_NEAR(sp[0].pan_rad, aim(rig, Side::kLeft, target, 1).pan, 0.02) << model;
+  }
+}

@@ -1,6 +1,7 @@
-// Delay compensation: the constant-velocity Kalman filter, the Smith predictor against the
-// shared plant model (right and wrong), and the controller's smith mode in a fast in-process
-// loop (ideal measurements, exact PT1 + dead time) at a delay far beyond the paper's tau_max.
+// Delay compensation: the constant-velocity and the turn Kalman filters, the Smith predictor
+// against the shared plant model (right and wrong), and the controller's smith mode in a fast
+// in-process loop (ideal measurements, exact PT1 + dead time) at a delay far beyond the paper's
+// tau_max.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include "control/controller/kalman.hpp"
 #include "control/controller/pointing.hpp"
 #include "control/controller/smith.hpp"
+#include "control/controller/turn_kalman.hpp"
 #include "control/stability/stability.hpp"
 #include "control/stability/track_analysis.hpp"
 #include "sim/scene.hpp"
@@ -45,6 +47,78 @@ TEST(Kalman, GatesAnOutlierAndRestartsOnATargetThatReallyJumped) {
   EXPECT_LT((kf.positionAt(1.0) - here).norm(), 1e-3);
   for (int k = 1; k < 4; ++k) EXPECT_FALSE(kf.update(1.0 + k / 30.0, there, R));
   kf.update(1.0 + 4 / 30.0, there, R);  // the fifth in a row: the target is there
+  EXPECT_LT((kf.positionAt(1.0 + 4 / 30.0) - there).norm(), 1e-9);
+}
+
+namespace {
+
+// Uniform circular motion in a tilted plane (the turn filter knows no preferred axis): radius
+// 0.6 m at 1.5 m/s (w = 2.5 rad/s, the fast_circle scene), about the unit normal n.
+struct Circle {
+  Eigen::Vector3d centre{0.1, 0.2, 2.0}, n = Eigen::Vector3d(0.3, 1.0, 0.2).normalized();
+  double radius_m = 0.6, w_rad_s = 2.5;
+  Eigen::Vector3d position(double t) const {
+    const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+    return centre + radius_m * (std::cos(w_rad_s * t) * e1 + std::sin(w_rad_s * t) * e2);
+  }
+  Eigen::Vector3d velocity(double t) const { return w_rad_s * n.cross(position(t) - centre); }
+};
+
+}  // namespace
+
+TEST(TurnKalman, ItsModelMovesExactlyAlongACircle) {
+  const Circle c;
+  pc::TurnKalman::State x;
+  x << c.position(0.3), c.velocity(0.3), c.w_rad_s * c.n;
+  for (double dt : {1e-5, 0.033, 1.0, 2.0}) {
+    const pc::TurnKalman::State y = pc::TurnKalman::propagate(x, dt);
+    EXPECT_LT((y.head<3>() - c.position(0.3 + dt)).norm(), 1e-9) << dt;
+    EXPECT_LT((y.segment<3>(3) - c.velocity(0.3 + dt)).norm(), 1e-9) << dt;
+  }
+  // Without a turn: a straight line.
+  x.tail<3>().setZero();
+  EXPECT_LT(
+      (pc::TurnKalman::propagate(x, 1.0).head<3>() - (c.position(0.3) + c.velocity(0.3))).norm(),
+      1e-12);
+}
+
+TEST(TurnKalman, LearnsTheTurnOfACircleAndPredictsASecondAhead) {
+  const Circle c;
+  std::mt19937 rng(4);
+  std::normal_distribution<double> noise(0.0, 0.01);  // 1 cm, as stereo at 2 m
+  const Eigen::Matrix3d R = Eigen::Matrix3d::Identity() * 1e-4;
+  pc::TurnKalman turn;
+  pc::ConstantVelocityKalman straight;
+  double sum_sq_turn = 0, sum_sq_straight = 0;
+  int n = 0;
+  for (int k = 0; k <= 30 * 6; ++k) {
+    const double t = k / 30.0;
+    const Eigen::Vector3d z = c.position(t) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    ASSERT_TRUE(turn.update(t, z, R)) << t;
+    straight.update(t, z, R);
+    if (t < 2.0) continue;  // after the filters settled: where they put the target 1 s later
+    sum_sq_turn += (turn.positionAt(t + 1.0) - c.position(t + 1.0)).squaredNorm();
+    sum_sq_straight += (straight.positionAt(t + 1.0) - c.position(t + 1.0)).squaredNorm();
+    ++n;
+  }
+  const double rms_turn = std::sqrt(sum_sq_turn / n), rms_straight = std::sqrt(sum_sq_straight / n);
+  std::printf("circle r 0.6 m at 1.5 m/s, 1 s ahead: turn %.3f m RMS, constant velocity %.3f m\n",
+              rms_turn, rms_straight);
+  EXPECT_LT((turn.turnRate() - c.w_rad_s * c.n).norm(), 0.05 * c.w_rad_s);
+  // 1 s is 0.4 of a turn: the tangent (constant velocity) misses by about the diameter.
+  EXPECT_LT(rms_turn, 0.1);
+  EXPECT_GT(rms_straight, 1.0);
+}
+
+TEST(TurnKalman, GatesAnOutlierAndRestartsOnATargetThatReallyJumped) {
+  pc::TurnKalman kf;
+  const Eigen::Matrix3d R = Eigen::Matrix3d::Identity() * 1e-4;
+  const Eigen::Vector3d here(0, 0, 3), there(1, 0, 3);
+  for (int k = 0; k < 30; ++k) ASSERT_TRUE(kf.update(k / 30.0, here, R));
+  EXPECT_FALSE(kf.update(1.0, there, R));
+  EXPECT_LT((kf.positionAt(1.0) - here).norm(), 1e-3);
+  for (int k = 1; k < 4; ++k) EXPECT_FALSE(kf.update(1.0 + k / 30.0, there, R));
+  kf.update(1.0 + 4 / 30.0, there, R);
   EXPECT_LT((kf.positionAt(1.0 + 4 / 30.0) - there).norm(), 1e-9);
 }
 
@@ -103,12 +177,15 @@ namespace {
 // A lockstep loop without images: the controller sees the true target at each frame's capture
 // with the heads' true PTZ; returns the RMS distance of the target's pixel from the image
 // centre (both cameras) after 3 s.
-double figureEightCentringRmsPx(const std::string& mode, double delay_s, double model_scale) {
+double centringRmsPx(const ptz::sim::Trajectory& path, const std::string& mode, double delay_s,
+                     double model_scale,
+                     const std::string& kf_model = pc::ControllerParams().kf_model) {
   const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
   ptz::PtzPlant::Params plant = ptz::defaultPlantParams();
   for (auto& a : plant.axis) a.dead_time_s = delay_s;
   pc::ControllerParams cp;
   cp.mode = mode;
+  cp.kf_model = kf_model;
   cp.limits = plant;
   for (int a = 0; a < 2; ++a) {
     cp.limits.axis[a].gain *= model_scale;
@@ -120,11 +197,6 @@ double figureEightCentringRmsPx(const std::string& mode, double delay_s, double 
   // Stereo noise at 3 m: ~1 mm across, ~1 cm in depth (0.3 px centroids, f 900 px, b 0.3 m).
   const Eigen::Vector3d sigma_m(0.001, 0.001, 0.01);
   ptz::PtzPlant heads(plant, {0, 0, 1}, {0, 0, 1});
-  ptz::sim::Trajectory path;  // the demo's ball
-  path.type = ptz::sim::Trajectory::Type::kFigureEight;
-  path.centre_m = {0.0, 0.1, 3.0};
-  path.amplitude_m = {1.0, 0.2, 0.8};
-  path.period_s = 30.0;
   double sum_sq = 0;
   int n = 0;
   for (int k = 0; k < 30 * 30; ++k) {
@@ -148,6 +220,20 @@ double figureEightCentringRmsPx(const std::string& mode, double delay_s, double 
   return std::sqrt(sum_sq / n);
 }
 
+ptz::sim::Trajectory demoFigureEight() {
+  ptz::sim::Trajectory path;
+  path.type = ptz::sim::Trajectory::Type::kFigureEight;
+  path.centre_m = {0.0, 0.1, 3.0};
+  path.amplitude_m = {1.0, 0.2, 0.8};
+  path.period_s = 30.0;
+  return path;
+}
+
+double figureEightCentringRmsPx(const std::string& mode, double delay_s, double model_scale,
+                                const std::string& kf_model = pc::ControllerParams().kf_model) {
+  return centringRmsPx(demoFigureEight(), mode, delay_s, model_scale, kf_model);
+}
+
 }  // namespace
 
 TEST(SmithMode, TracksAFigureEightWithOneSecondOfDelay) {
@@ -164,6 +250,24 @@ TEST(SmithMode, TracksAFigureEightWithOneSecondOfDelay) {
     std::printf("figure-eight, tau 0.6 s, model K and T x%.1f: %.2f px RMS\n", scale, px);
     EXPECT_LE(px, 20.0);
   }
+  // The turn model is no worse than constant velocity on the slow figure-eight.
+  const double cv_px = figureEightCentringRmsPx("smith", 1.0, 1.0, "cv");
+  const double ct_px = figureEightCentringRmsPx("smith", 1.0, 1.0, "ct");
+  std::printf("figure-eight, tau 1 s: smith cv %.2f px RMS, ct %.2f px\n", cv_px, ct_px);
+  EXPECT_LE(ct_px, cv_px * 1.1);
+}
+
+TEST(SmithMode, TheTurnModelTracksAFastCircleWithOneSecondOfDelay) {
+  ptz::sim::Trajectory path;  // test/scenarios/fast_circle.yaml
+  path.type = ptz::sim::Trajectory::Type::kCircle;
+  path.centre_m = {0.0, 0.1, 2.0};
+  path.amplitude_m = {0.6, 0.0, 0.6};
+  path.period_s = 2.5133;
+  const double ct_px = centringRmsPx(path, "smith", 1.0, 1.0, "ct");
+  const double cv_px = centringRmsPx(path, "smith", 1.0, 1.0, "cv");
+  std::printf("fast circle, tau 1 s: smith ct %.2f px RMS, cv %.2f px\n", ct_px, cv_px);
+  EXPECT_LE(ct_px, 15.0);
+  EXPECT_LT(ct_px, cv_px / 3);
 }
 
 namespace {
@@ -184,9 +288,13 @@ bool trackDecays(const pc::TrackLoopParams& loop, double g) {
 }  // namespace
 
 TEST(TrackAnalysis, MarginsForCalibrationErrorAgreeWithTheTimeResponse) {
-  // The default track mode (lead 0.3 s, Tv 0.25 s) at the paper's tau_max and at 1 s.
+  // ptz-control's default track mode (lead_s, rate_filter_s) at the paper's tau_max and at 1 s;
+  // the analysis's defaults are the controller's.
+  const pc::ControllerParams defaults;
+  EXPECT_EQ(pc::TrackLoopParams().lead_s, defaults.lead_s);
+  EXPECT_EQ(pc::TrackLoopParams().rate_filter_s, defaults.rate_filter_s);
   for (double tau : {0.384, 1.0}) {
-    const pc::TrackLoopParams loop{0.24, 0.3, 0.25, tau};
+    const pc::TrackLoopParams loop{0.24, defaults.lead_s, defaults.rate_filter_s, tau};
     const pc::TrackMargins m = pc::trackLoopMargins(loop);
     std::printf(
         "track, tau %.3f s: peak |PF| %.3f -> |g| < %.3f for any delay; here g in "

@@ -141,6 +141,22 @@ TEST(Tracker, AnObjectThatReversesKeepsItsIdentity) {
   EXPECT_NEAR(only(tracker).position().x(), x(119 * kFrameS), 0.01);
 }
 
+TEST(Tracker, AFastReversalKeepsItsIdentityFromTheFirstFrame) {
+  // 0.9 m/s, then at once 0.9 m/s back: one frame later the measurement is 6 cm from the
+  // prediction, outside a settled track's gate and beyond 1.5 m/s times one frame, but within the
+  // ball's own radius, where no other ball can be.
+  Tracker tracker;
+  auto x = [](double t) { return t < 2 ? 0.9 * t : 1.8 - 0.9 * (t - 2); };
+  for (int k = 0; k < 90; ++k) {
+    const double t = k * kFrameS;
+    tracker.update(t, {at({x(t), 0, 3})});
+    ASSERT_EQ(tracker.tracks().size(), 1u) << "frame " << k;
+  }
+  EXPECT_EQ(tracker.tracksStarted(), 1);
+  EXPECT_GE(tracker.recoveries(), 1);
+  EXPECT_LT(only(tracker).velocity().x(), -0.7);
+}
+
 TEST(Tracker, ACoastingTrackDoesNotTakeAnotherObjectsMeasurement) {
   // Two balls 0.4 m apart; the first is hidden for 1.5 s (its covariance grows), the second goes
   // on being seen next to where the first was predicted: it stays the second's.
@@ -156,6 +172,34 @@ TEST(Tracker, ACoastingTrackDoesNotTakeAnotherObjectsMeasurement) {
   EXPECT_EQ(tracker.find(1)->state, TrackState::kCoasting);
   EXPECT_EQ(tracker.find(2)->state, TrackState::kConfirmed);
   EXPECT_LT((tracker.find(2)->position() - Eigen::Vector3d(0.4, 0, 3)).norm(), 0.01);
+}
+
+TEST(Tracker, BetweenTwoLostTracksTheNearerPredictionWins) {
+  // Two balls 1.2 m apart, both hidden; A (at the origin) since 2.6 s, B since 1.1 s. A ball
+  // appears where A was. Both gates take it; an uncapped ln det S would give it to B, hidden for
+  // less time though 1.2 m off; capped, the d2 decides.
+  auto run = [](double cap_m) {
+    TrackerParams params;
+    params.recover_speed_m_s = 0;
+    params.coast_s = 5;
+    params.rank_sigma_cap_m = cap_m;
+    Tracker tracker(params);
+    int k = 0;
+    for (; k < 30; ++k)
+      tracker.update(k * kFrameS,
+                     {at({0, 0, 3}, "red_ball", 0.005, 0), at({1.2, 0, 3}, "red_ball", 0.005, 1)});
+    for (; k < 75; ++k) tracker.update(k * kFrameS, {at({1.2, 0, 3}, "red_ball", 0.005, 0)});
+    for (; k < 108; ++k) tracker.update(k * kFrameS, {});
+    tracker.update(k * kFrameS, {at({0, 0, 3})});
+    return tracker;
+  };
+  const Tracker capped = run(TrackerParams().rank_sigma_cap_m);
+  EXPECT_EQ(capped.find(1)->state, TrackState::kConfirmed);
+  EXPECT_EQ(capped.find(2)->state, TrackState::kCoasting);
+  // The test can fail: without the cap the other track takes the measurement.
+  const Tracker uncapped = run(1e6);
+  EXPECT_EQ(uncapped.find(1)->state, TrackState::kCoasting);
+  EXPECT_EQ(uncapped.find(2)->state, TrackState::kConfirmed);
 }
 
 TEST(Tracker, ANewObjectLongAfterALossIsANewTrack) {
@@ -410,4 +454,67 @@ TEST(TrackMeasurements, CentresThatAreNotTheObjectsAreNotTrusted) {
   EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "overlap");
   two[1].x.head<3>() = Eigen::Vector3d(1.0, 0, 2.5);  // elsewhere: one track under it
   EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "");
+}
+
+// A box turning at 0.5 rad/s through the wrap of its 90-degree period, its yaw measured with
+// 2 degrees of noise: the filtered yaw follows as closely as the filter's steady state says
+// (modulo the period), its variance below the measurements'. A mirror-like outlier 30 degrees off
+// is refused; three in a row start the yaw afresh. A ball, whose measurements carry no yaw, has
+// none.
+TEST(Tracker, ABoxsYawIsFilteredThroughTheWrapOfItsPeriod) {
+  Tracker tracker;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0, 2 * M_PI / 180);
+  const double period = M_PI / 2;
+  auto wrap = [&](double a) { return a - period * std::floor(a / period + 0.5); };
+  auto yaw = [](double t) { return 0.3 + 0.5 * t; };  // from 17 degrees past 45 and on
+  auto box = [&](double t, double measured) {
+    TrackMeasurement m = at({0.2 * t, 0.3, 2.5}, "green_box");
+    m.has_yaw = true;
+    m.yaw_rad = wrap(measured);
+    m.yaw_var_rad2 = std::pow(2 * M_PI / 180, 2);
+    m.yaw_period_rad = period;
+    return m;
+  };
+  double sum2 = 0;
+  int n = 0;
+  for (int k = 0; k < 120; ++k) {
+    const double t = k * kFrameS;
+    tracker.update(t, {box(t, yaw(t) + noise(rng)), at({-0.5, 0, 3}, "red_ball", 0.005, 1)});
+    for (const Track& tr : tracker.tracks()) {
+      EXPECT_TRUE(tr.class_name != "red_ball" || !tr.has_yaw);
+    }
+    const Track& b = tracker.tracks()[0];
+    ASSERT_EQ(b.class_name, "green_box");
+    ASSERT_TRUE(b.has_yaw);
+    EXPECT_GE(b.yaw_rad, -period / 2);
+    EXPECT_LT(b.yaw_rad, period / 2);
+    if (k >= 10) {
+      const double e = wrap(b.yaw_rad - yaw(t));
+      sum2 += e * e;
+      ++n;
+      EXPECT_LT(b.yawVarianceAt(t, tracker.params().yaw_psd_rad2_s), std::pow(2 * M_PI / 180, 2));
+    }
+  }
+  // The random walk filter's steady state: variance P of P- = P + q, P = P- R / (P- + R), and
+  // the lag of a constant turn, rate dt (1 - K) / K.
+  const double q = tracker.params().yaw_psd_rad2_s * kFrameS, r = std::pow(2 * M_PI / 180, 2);
+  const double p_minus = (q + std::sqrt(q * q + 4 * q * r)) / 2, gain = p_minus / (p_minus + r);
+  const double lag = 0.5 * kFrameS * (1 - gain) / gain;
+  const double expected_rad = std::sqrt(p_minus * (1 - gain) + lag * lag);
+  EXPECT_LT(std::sqrt(sum2 / n), 1.15 * expected_rad);
+  EXPECT_LT(expected_rad, 2 * M_PI / 180);
+  EXPECT_EQ(tracker.yawsRefused(), 0);
+  // One outlier: refused, the yaw stays.
+  double t = 120 * kFrameS;
+  tracker.update(t, {box(t, yaw(t) + 30 * M_PI / 180)});
+  EXPECT_EQ(tracker.yawsRefused(), 1);
+  EXPECT_LT(std::abs(wrap(tracker.tracks()[0].yaw_rad - yaw(t))), 3 * M_PI / 180);
+  // Three in a row: the next one is taken as the yaw afresh.
+  for (int k = 121; k <= 124; ++k) {
+    t = k * kFrameS;
+    tracker.update(t, {box(t, yaw(t) + 30 * M_PI / 180)});
+  }
+  EXPECT_EQ(tracker.yawsRefused(), 3);
+  EXPECT_LT(std::abs(wrap(tracker.tracks()[0].yaw_rad - yaw(t) - 30 * M_PI / 180)), 3 * M_PI / 180);
 }

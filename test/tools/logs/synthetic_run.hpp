@@ -43,6 +43,7 @@ inline ptzstereo::camera_model_t camera(double x_m) {
 struct Object {
   std::string name, class_name;
   std::array<double, 3> position_m;
+  double visible_fraction = 1;  // in both cameras
 };
 
 inline ptzstereo::sim_truth_t truth(int64_t seq, const std::vector<Object>& objects) {
@@ -59,6 +60,7 @@ inline ptzstereo::sim_truth_t truth(int64_t seq, const std::vector<Object>& obje
     s.shape = "sphere";
     for (int i = 0; i < 3; ++i) s.position_m[i] = o.position_m[i];
     s.radius_m = 0.05;
+    s.visible_fraction[0] = s.visible_fraction[1] = o.visible_fraction;
     t.objects.push_back(s);
   }
   t.num_objects = static_cast<int32_t>(t.objects.size());

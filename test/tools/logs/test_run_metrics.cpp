@@ -144,6 +144,47 @@ TEST(RunMetrics, TheTrackedObjectIsScoredByIdentityAndASwitchIsCounted) {
   EXPECT_NEAR(centring.at(9)[2], b_right, 1e-9);
 }
 
+TEST(RunMetrics, ReacquisitionIsTimedFromTheFrameTheObjectIsFullyVisibleAgain) {
+  RunMetrics m("red_ball", 0.0);
+  // 0-9 seen; 10-19 hidden; 20-29 visible again, the target from 23 on: 0.3 s. 30-39 partly out
+  // of the left image (the disk of its radius crosses the border) but the target; 40-49 back in,
+  // the target at once: 0 s. 50-54 hidden, 55-59 visible, never the target again: at least 0.4 s.
+  for (int64_t seq = 0; seq < 60; ++seq) {
+    syn::Object ball = kBall;
+    if ((seq >= 10 && seq < 20) || (seq >= 50 && seq < 55)) ball.visible_fraction = 0.3;
+    // Centre inside the left image, 315 px right of its centre; the radius is 12.5 px there.
+    if (seq >= 30 && seq < 40)
+      ball.position_m = {-syn::kHalfBaselineM + 315 * 2 / syn::kFocalPx, 0, 2};
+    m.onTruth(syn::truth(seq, {ball}));
+    const bool target = seq < 10 || (seq >= 23 && seq < 50);
+    m.onPose(target ? syn::pose(seq, "red_ball", ball.position_m) : syn::pose(seq));
+  }
+  auto s = m.summary();
+  EXPECT_EQ(s.reappearances, 3);
+  EXPECT_NEAR(s.reacquire_max_s, 0.4, 1e-9);
+  EXPECT_NE(s.toJson().find("\"reacquire_max_s\": 0.4"), std::string::npos) << s.toJson();
+  // Without the last loss the longest is the first one's 0.3 s.
+  RunMetrics first("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 30; ++seq) {
+    syn::Object ball = kBall;
+    if (seq >= 10 && seq < 20) ball.visible_fraction = 0;
+    first.onTruth(syn::truth(seq, {ball}));
+    first.onPose(seq < 10 || seq >= 23 ? syn::pose(seq, "red_ball", ball.position_m)
+                                       : syn::pose(seq));
+  }
+  s = first.summary();
+  EXPECT_EQ(s.reappearances, 1);
+  EXPECT_NEAR(s.reacquire_max_s, 0.3, 1e-9);
+  // Never hidden: no number.
+  RunMetrics never("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 5; ++seq) {
+    never.onTruth(syn::truth(seq, {kBall}));
+    never.onPose(syn::pose(seq, "red_ball", kBall.position_m));
+  }
+  EXPECT_EQ(never.summary().reappearances, 0);
+  EXPECT_TRUE(std::isnan(never.summary().reacquire_max_s));
+}
+
 TEST(RunMetrics, APoseBeforeItsTruthIsScoredAndTheArrivalOrderDoesNotMatter) {
   // 30 frames of two balls crossing; every kind of message, then fed in three orders.
   std::vector<std::function<void(RunMetrics&)>> messages;
@@ -247,4 +288,46 @@ TEST(LogSummary, TheRunsNumbersAndThePerFrameCsvOfALoggedRun) {
   EXPECT_TRUE(ends(lines[1 + 12], ",1,0,,coasting")) << lines[13];
   EXPECT_TRUE(ends(lines[1 + 15], ",1,1,ball_b,tracking")) << lines[16];
   EXPECT_EQ(lines[1 + 10].rfind("1.000000,10,", 0), 0u) << lines[11];
+}
+
+// A box's orientation is scored modulo its 90-degree turns about its own vertical axis: a yaw
+// 3 degrees off, or 93, or -87, is 3 degrees; a pose without one, or of a ball, is no sample.
+TEST(RunMetrics, ABoxsOrientationErrorIsTheAngleModuloItsQuarterTurns) {
+  RunMetrics m("green_box", 0.0);
+  const double truth_yaw = 0.4;
+  const double deg = M_PI / 180;
+  const std::vector<double> estimates = {truth_yaw + 3 * deg, truth_yaw + 93 * deg,
+                                         truth_yaw - 87 * deg, truth_yaw - 3 * deg};
+  for (int64_t seq = 0; seq < 6; ++seq) {
+    ptzstereo::sim_truth_t t = syn::truth(seq, {{"box", "green_box", {0.1, 0.2, 2}}});
+    t.objects[0].shape = "box";
+    t.objects[0].orientation_wxyz[0] = std::cos(truth_yaw / 2);
+    t.objects[0].orientation_wxyz[2] = std::sin(truth_yaw / 2);
+    m.onTruth(t);
+    ptzstereo::object_pose_t p = syn::pose(seq, "green_box", {0.1, 0.2, 2});
+    auto& o = p.objects[1];
+    if (seq < 4) {
+      o.has_orientation = true;
+      o.orientation_wxyz[0] = std::cos(estimates[static_cast<size_t>(seq)] / 2);
+      o.orientation_wxyz[2] = std::sin(estimates[static_cast<size_t>(seq)] / 2);
+    } else if (seq == 4) {
+      o.has_orientation = false;  // not estimated
+    } else {
+      o.has_orientation = true;  // a quaternion of zeros is no orientation
+    }
+    m.onPose(p);
+  }
+  const auto s = m.summary();
+  EXPECT_EQ(s.orientation_samples, 4);
+  EXPECT_NEAR(s.orientation_error_rms_deg, 3.0, 1e-9);
+  EXPECT_NE(s.toJson().find("\"orientation_samples\": 4"), std::string::npos) << s.toJson();
+
+  RunMetrics ball("red_ball", 0.0);
+  ball.onTruth(syn::truth(0, {kBall}));
+  ptzstereo::object_pose_t p = syn::pose(0, "red_ball", kBall.position_m);
+  p.objects[1].has_orientation = true;
+  p.objects[1].orientation_wxyz[0] = 1;
+  ball.onPose(p);
+  EXPECT_EQ(ball.summary().orientation_samples, 0);
+  EXPECT_NE(ball.summary().toJson().find("\"orientation_error_rms_deg\": null"), std::string::npos);
 }

@@ -77,9 +77,10 @@ TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
     EXPECT_NE(readAll(dir + "/report.md").find(std::string("](") + png + ")"), std::string::npos)
         << png << " is not shown in report.md";
   }
-  // The numbers, from the log by this test.
+  // The numbers, from the log by this test (a pose may be logged before its truth).
   int64_t frames = 0, poses = 0, without_target = 0;
   std::map<int64_t, ptzstereo::sim_truth_t> truth;
+  std::vector<ptzstereo::object_pose_t> targeted;
   std::vector<double> errors_m, centring_px;
   int64_t first_utime = -1;
   lcm::LogFile log(kFixture, "r");
@@ -103,12 +104,16 @@ TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
         ++without_target;
         continue;
       }
-      const auto& o = p.objects[static_cast<size_t>(p.target_index)];
-      const auto& t = truth.at(p.frame_seq).objects[0];
-      errors_m.push_back(std::hypot(o.position_m[0] - t.position_m[0],
-                                    o.position_m[1] - t.position_m[1],
-                                    o.position_m[2] - t.position_m[2]));
+      targeted.push_back(p);
     }
+  }
+  for (const auto& p : targeted) {
+    const auto& o = p.objects[static_cast<size_t>(p.target_index)];
+    ASSERT_EQ(truth.count(p.frame_seq), 1u) << "frame " << p.frame_seq;
+    const auto& t = truth.at(p.frame_seq).objects[0];
+    errors_m.push_back(std::hypot(o.position_m[0] - t.position_m[0],
+                                  o.position_m[1] - t.position_m[1],
+                                  o.position_m[2] - t.position_m[2]));
   }
   auto rms = [](const std::vector<double>& v) {
     double s = 0;
@@ -207,6 +212,11 @@ TEST(Report, TrackIdsAndControllerStateOverTimeAndTheRunsNumbersOfAKnownRun) {
   EXPECT_EQ(d.target_tracks[5].target_id, 1);   // frame 7
   EXPECT_EQ(d.target_tracks[14].target_id, 2);  // frame 16
   EXPECT_EQ(d.target_tracks[14].tracks, 2);
+  // Every track of every message: none in frames 2-4, two in frames 5-19.
+  ASSERT_EQ(d.track_points.size(), 15u * 2);
+  EXPECT_NEAR(d.track_points[0].t_s, 0.5, 1e-9);
+  EXPECT_EQ(d.track_points.back().id, 2);
+  EXPECT_EQ(d.track_points.back().state, ptzstereo::object_track_t::STATE_CONFIRMED);
   ASSERT_EQ(d.control.size(), 18u);
   EXPECT_EQ(d.control[0].state, ptzstereo::control_state_t::STATE_SEARCHING);
   EXPECT_EQ(d.control[10].state, ptzstereo::control_state_t::STATE_COASTING);  // frame 12
@@ -231,6 +241,8 @@ TEST(Report, TrackIdsAndControllerStateOverTimeAndTheRunsNumbersOfAKnownRun) {
   EXPECT_EQ(control.rfind("t_s,state,target_id\n0.2,2,-1\n", 0), 0u) << control;
   const std::string target = readAll(dir + "/target.csv");
   EXPECT_NE(target.find("\n1.6,2,2\n"), std::string::npos) << target;
+  const std::string points = readAll(dir + "/tracks.csv");
+  EXPECT_EQ(points.rfind("t_s,track_id,state\n0.5,1,1\n", 0), 0u) << points;
   const std::string summary = readAll(dir + "/summary.json");
   EXPECT_EQ(jsonNumber(summary, "target_switches"), K::kSwitches);
   EXPECT_NEAR(jsonNumber(summary, "search_time_s"), K::kSearchS, 1e-9);

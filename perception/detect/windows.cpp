@@ -1,0 +1,254 @@
+#include "perception/detect/windows.hpp"
+
+#include <opencv2/core/utility.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ptz::perception {
+
+bool projectSphere(const CameraView& view, const Eigen::Vector3d& p_head, double radius_m,
+                   double margin_px, cv::Rect* rect) {
+  return projectBox(view, p_head, Eigen::Vector3d::Constant(radius_m), margin_px, rect);
+}
+
+bool projectBox(const CameraView& view, const Eigen::Vector3d& p_head,
+                const Eigen::Vector3d& half_m, double margin_px, cv::Rect* rect) {
+  const Eigen::Vector3d c = view.toCamera(p_head);
+  if (!c.allFinite() || !half_m.allFinite() || half_m.minCoeff() < 0) return false;
+  // Not near the camera's plane: the nearest corner 1 cm ahead at least.
+  if (c.z() - half_m.z() < 0.01) return false;
+  double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d corner =
+        c + half_m.cwiseProduct(Eigen::Vector3d(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1));
+    const Eigen::Vector2d px = view.projectCamera(corner);
+    if (!px.allFinite()) return false;
+    x0 = std::min(x0, px.x());
+    y0 = std::min(y0, px.y());
+    x1 = std::max(x1, px.x());
+    y1 = std::max(y1, px.y());
+  }
+  x0 -= margin_px;
+  y0 -= margin_px;
+  x1 += margin_px;
+  y1 += margin_px;
+  // Far outside any image: not a window (and no overflow in the int rectangle).
+  constexpr double kFar = 1 << 20;
+  if (x0 < -kFar || y0 < -kFar || x1 > kFar || y1 > kFar) return false;
+  const int ix0 = static_cast<int>(std::floor(x0)), iy0 = static_cast<int>(std::floor(y0));
+  *rect = cv::Rect(ix0, iy0, static_cast<int>(std::ceil(x1)) - ix0 + 1,
+                   static_cast<int>(std::ceil(y1)) - iy0 + 1);
+  return true;
+}
+
+bool trackWindow(const CameraView& view, const Track& track, double t_s, const WindowParams& p,
+                 cv::Rect* rect) {
+  if (track.radius_m <= 0) return false;
+  // The position's covariance carried to t_s by the motion model (p + v dt + a dt^2 / 2); the
+  // process noise of one frame is small beside the margin.
+  const double dt = std::max(0.0, t_s - track.t_s);
+  Eigen::Matrix<double, 3, 9> J;
+  J << Eigen::Matrix3d::Identity(), dt * Eigen::Matrix3d::Identity(),
+      dt * dt / 2 * Eigen::Matrix3d::Identity();
+  // In the camera's frame the k-sigma ellipsoid's bounding box is k sqrt(C_ii) along each axis:
+  // the depth's larger uncertainty does not widen the window across the image.
+  const Eigen::Matrix3d R = view.rotation_head_camera.transpose();
+  const Eigen::Matrix3d cov = R * (J * track.P * J.transpose()) * R.transpose();
+  const Eigen::Vector3d sigma = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return projectBox(view, track.positionAt(t_s),
+                    Eigen::Vector3d::Constant(track.radius_m) + p.sigma_scale * sigma, p.margin_px,
+                    rect);
+}
+
+std::vector<cv::Rect> mergeRects(std::vector<cv::Rect> rects) {
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (size_t i = 0; i < rects.size() && !merged; ++i) {
+      for (size_t j = i + 1; j < rects.size(); ++j) {
+        // Touching counts: a region on the seam would be cut in both.
+        const cv::Rect a(rects[i].x - 1, rects[i].y - 1, rects[i].width + 2, rects[i].height + 2);
+        if ((a & rects[j]).empty()) continue;
+        rects[i] |= rects[j];
+        rects.erase(rects.begin() + static_cast<ptrdiff_t>(j));
+        merged = true;
+        break;
+      }
+    }
+  }
+  return rects;
+}
+
+WindowScanner::WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px)
+    : p_(params), size_(image_size), margin_px_(exact_margin_px) {
+  for (const char* k : {"frames_scanned_full", "frames_scanned_windowed", "windows_grown",
+                        "windows_cut_to_full_scan", "windows_unbounded", "full_scans_disabled",
+                        "full_scans_no_tracks", "full_scans_periodic", "full_scans_behind",
+                        "full_scans_cover", "full_scans_cut"}) {
+    counts_[k] = 0;
+  }
+}
+
+std::string WindowScanner::refuse(const std::vector<cv::Rect>& windows) const {
+  double area = 0;
+  for (const auto& w : windows) area += w.area();
+  if (area > p_.max_cover_fraction * size_.area()) return "cover";
+  return "";
+}
+
+ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
+                             const CameraView& right) {
+  ScanPlan plan;
+  if (!p_.enabled) {
+    plan.reason = "disabled";
+    return plan;
+  }
+  std::vector<cv::Rect> lw, rw;
+  bool any = false;
+  for (const auto& t : tracks) {
+    if (t.state == TrackState::kTentative) continue;
+    cv::Rect l, r;
+    if (!trackWindow(left, t, t_s, p_, &l) || !trackWindow(right, t, t_s, p_, &r)) {
+      // A coasting track unseen for a while: its uncertainty reaches behind a camera and bounds
+      // no window; the periodic full scan looks for it, as for a new object.
+      if (t.state == TrackState::kCoasting) {
+        ++plan.unbounded;
+        continue;
+      }
+      plan.reason = "behind";
+      return plan;
+    }
+    // A window wholly outside an image has nothing to scan there (the periodic full scan looks);
+    // one across the border is cut to the image: the crop's edge is then the image's, exact.
+    const cv::Rect image(0, 0, size_.width, size_.height);
+    if (!(l & image).empty()) lw.push_back(l & image);
+    if (!(r & image).empty()) rw.push_back(r & image);
+    any = true;
+  }
+  if (!any) {
+    plan.reason = "no_tracks";
+  } else if (since_full_ + 1 >= p_.full_scan_every) {
+    plan.reason = "periodic";
+  } else {
+    plan.left = mergeRects(lw);
+    plan.right = mergeRects(rw);
+    plan.reason = refuse(plan.left);
+    if (plan.reason.empty()) plan.reason = refuse(plan.right);
+    plan.full = !plan.reason.empty();
+  }
+  return plan;
+}
+
+bool WindowScanner::detectSide(const Detector& detector, const std::vector<cv::Rect>& windows,
+                               const DecodeParts& decode, std::vector<Region>* regions, bool* cut,
+                               std::string* why) const {
+  regions->clear();
+  *cut = false;
+  if (windows.empty()) return true;  // no track in this camera's view: nothing to decode
+  const int margin = margin_px_;
+  const cv::Rect image(0, 0, size_.width, size_.height);
+  std::vector<cv::Rect> crops;
+  for (const auto& w : windows) {
+    crops.push_back(
+        cv::Rect(w.x - margin, w.y - margin, w.width + 2 * margin, w.height + 2 * margin) & image);
+  }
+  // One decode per side: a JPEG's rows are entropy-decoded once, down to the last crop's.
+  std::vector<cv::Mat> parts;
+  if (!decode(crops, &parts, why)) return false;
+  if (parts.size() != crops.size()) {
+    *why = "the windows' pixels are not one part per window";
+    return false;
+  }
+  for (size_t i = 0; i < windows.size(); ++i) {
+    if (parts[i].size() != crops[i].size() || parts[i].type() != CV_8UC3) {
+      *why = "the window's pixels are not the window's size or BGR";
+      return false;
+    }
+    bool c = false;
+    const std::vector<Region> found =
+        detector.detectWindow(parts[i], crops[i].tl(), windows[i], size_, &c);
+    regions->insert(regions->end(), found.begin(), found.end());
+    *cut = *cut || c;
+  }
+  // A full scan's order: by class, then largest first.
+  std::stable_sort(regions->begin(), regions->end(), [](const Region& a, const Region& b) {
+    return a.class_index != b.class_index ? a.class_index < b.class_index : a.area_px2 > b.area_px2;
+  });
+  return true;
+}
+
+bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const DecodeParts& left,
+                           const DecodeParts& right, std::vector<Region>* left_regions,
+                           std::vector<Region>* right_regions, std::string* why) {
+  const DecodeParts* decode[2] = {&left, &right};
+  std::vector<Region>* out[2] = {left_regions, right_regions};
+  std::vector<cv::Rect>* windows[2] = {&plan->left, &plan->right};
+  std::string errors[2];
+  bool ok[2] = {true, true}, cut[2] = {false, false};
+  const auto both = [&](const std::function<void(int)>& side) {
+    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
+      for (int i = range.start; i < range.end; ++i) side(i);
+    });
+  };
+  const auto failed = [&] {
+    if (ok[0] && ok[1]) return false;
+    *why = ok[0] ? "right image: " + errors[1] : "left image: " + errors[0];
+    return true;
+  };
+  if (!plan->full) {
+    both([&](int i) {
+      ok[i] = detectSide(detector, *windows[i], *decode[i], out[i], &cut[i], &errors[i]);
+    });
+    if (failed()) return false;
+    for (int i = 0; i < 2 && !plan->full; ++i) {
+      if (!cut[i]) continue;
+      // An object larger than its window (closer, or zoomed in): grow the side's windows once.
+      ++counts_["windows_grown"];
+      std::vector<cv::Rect> grown;
+      for (const auto& w : *windows[i]) {
+        const int dx = static_cast<int>(std::ceil(w.width * (p_.grow_factor - 1) / 2));
+        const int dy = static_cast<int>(std::ceil(w.height * (p_.grow_factor - 1) / 2));
+        grown.push_back(cv::Rect(w.x - dx, w.y - dy, w.width + 2 * dx, w.height + 2 * dy) &
+                        cv::Rect(0, 0, size_.width, size_.height));
+      }
+      *windows[i] = mergeRects(grown);
+      bool still_cut = !refuse(*windows[i]).empty();
+      if (!still_cut) {
+        ok[i] = detectSide(detector, *windows[i], *decode[i], out[i], &cut[i], &errors[i]);
+        if (failed()) return false;
+        still_cut = cut[i];
+      }
+      if (still_cut) {
+        ++counts_["windows_cut_to_full_scan"];
+        plan->full = true;
+        plan->reason = "cut";
+      }
+    }
+  }
+  if (plan->full) {
+    plan->left.clear();
+    plan->right.clear();
+    both([&](int i) {
+      std::vector<cv::Mat> image;
+      ok[i] = (*decode[i])({cv::Rect(0, 0, size_.width, size_.height)}, &image, &errors[i]);
+      if (ok[i] && (image.size() != 1 || image[0].size() != size_ || image[0].type() != CV_8UC3)) {
+        errors[i] = "the image is not the frame's size or BGR";
+        ok[i] = false;
+      }
+      if (!ok[i]) return;
+      *out[i] = detector.detect(image[0]);
+    });
+    if (failed()) return false;
+    ++counts_["frames_scanned_full"];
+    ++counts_["full_scans_" + plan->reason];
+    since_full_ = 0;
+  } else {
+    ++counts_["frames_scanned_windowed"];
+    counts_["windows_unbounded"] += plan->unbounded;
+    ++since_full_;
+  }
+  return true;
+}
+
+}  // namespace ptz::perception

@@ -1,0 +1,100 @@
+// Windows for speed (no LCM): with confirmed tracks, detection runs on a window around each
+// track's predicted image in each camera instead of the whole frame, and scans the whole frame
+// every few frames (and whenever a window could miss its object) for new objects. A window's
+// regions are those of a full scan: the detector works on a crop with enough margin for its
+// filters, and keeps only regions strictly inside the window. A window across the image's border
+// is cut to the image (the image's edge is exact).
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/rig.hpp"
+#include "perception/detect/detector.hpp"
+#include "perception/detect/tracker.hpp"
+
+namespace ptz::perception {
+
+struct WindowParams {
+  bool enabled = true;
+  int full_scan_every = 5;          // frames: every n-th frame is scanned whole (1: always)
+  double margin_px = 16;            // added around each track's projected extent
+  double sigma_scale = 3;           // k: the track's radius plus k sigma of its position covariance
+  double max_cover_fraction = 0.5;  // windows covering more of an image than this: full scan
+  double grow_factor = 2;           // a window whose region crosses its edge grows by this, once
+};
+
+// The image rectangle of a sphere of radius_m around p_head (all of it, distortion included,
+// through the eight corners of its bounding cube in the camera frame), grown by margin_px.
+// False when any of the cube is not in front of the camera.
+bool projectSphere(const CameraView& view, const Eigen::Vector3d& p_head, double radius_m,
+                   double margin_px, cv::Rect* rect);
+
+// The same for a box of half-extents half_m along the camera's axes around p_head.
+bool projectBox(const CameraView& view, const Eigen::Vector3d& p_head,
+                const Eigen::Vector3d& half_m, double margin_px, cv::Rect* rect);
+
+// A track's window in a view at t_s: its predicted position, a box of its radius + k sigma of the
+// predicted position covariance along each camera axis, the margin. False as projectBox.
+bool trackWindow(const CameraView& view, const Track& track, double t_s, const WindowParams& p,
+                 cv::Rect* rect);
+
+// Overlapping (or touching) rectangles replaced by their bounding box until none overlap.
+std::vector<cv::Rect> mergeRects(std::vector<cv::Rect> rects);
+
+// What a frame scans: the whole of both images, or windows in each.
+struct ScanPlan {
+  bool full = true;
+  std::string reason;  // why full: disabled, no_tracks, periodic, behind, cover, cut
+  std::vector<cv::Rect> left, right;
+  int unbounded = 0;  // coasting tracks whose window is unbounded, left to the periodic scan
+};
+
+// A camera's pixels: the parts `rects` of the image (full-image coordinates) as 8-bit BGR,
+// (*parts)[i] those of rects[i].
+using DecodeParts = std::function<bool(const std::vector<cv::Rect>& rects,
+                                       std::vector<cv::Mat>* parts, std::string* why)>;
+
+class WindowScanner {
+ public:
+  // exact_margin_px: the detector's (Detector::exactMarginPx).
+  WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px);
+
+  // The plan of the next frame at t_s from the tracks (predicted to t_s) and the frame's views;
+  // advances the periodic count.
+  ScanPlan plan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
+                const CameraView& right);
+
+  // Detects in one frame as planned, both sides on two cores: the whole images, or the windows
+  // (a window whose region crosses its edge grows once; still crossing, or grown beyond the
+  // image or the cover limit: the frame is scanned whole). False when a decode fails (*why).
+  bool detect(const Detector& detector, ScanPlan* plan, const DecodeParts& left,
+              const DecodeParts& right, std::vector<Region>* left_regions,
+              std::vector<Region>* right_regions, std::string* why);
+
+  // frames_scanned_full, frames_scanned_windowed, full_scans_<reason>, windows_grown,
+  // windows_cut_to_full_scan, windows_unbounded (coasting tracks left to the periodic scan in
+  // windowed frames), since the start.
+  const std::map<std::string, int64_t>& counts() const { return counts_; }
+  const WindowParams& params() const { return p_; }
+
+ private:
+  // Why windows cannot be used as they are ("" when they can): cover.
+  std::string refuse(const std::vector<cv::Rect>& windows) const;
+  // Regions of every window of one side; *cut when one crosses its window's edge.
+  bool detectSide(const Detector& detector, const std::vector<cv::Rect>& windows,
+                  const DecodeParts& decode, std::vector<Region>* regions, bool* cut,
+                  std::string* why) const;
+
+  WindowParams p_;
+  cv::Size size_;
+  int margin_px_;
+  int since_full_ = 0;  // windowed frames since the last full scan
+  std::map<std::string, int64_t> counts_;
+};
+
+}  // namespace ptz::perception
