@@ -17,8 +17,11 @@ namespace {
 
 const std::string kFixture = PTZ_SOURCE_DIR "/test/fixtures/closed_loop_2s.lcmlog";
 
+// One name per test: ctest runs this suite's tests side by side, and one test's output must not
+// be taken for what another left.
 std::string tempPath(const std::string& name) {
-  return std::string(::testing::TempDir()) + "log_programs_" + name;
+  return std::string(::testing::TempDir()) + "log_programs_" +
+         ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" + name;
 }
 
 std::string readAll(const std::string& path) {
