@@ -11,34 +11,21 @@
 #include "perception/detect/stereo.hpp"
 #include "sim/simulator.hpp"
 #include "support/data_dir.hpp"
+#include "support/detect_scene.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;
 using ptz::StereoRig;
 namespace perception = ptz::perception;
 namespace sim = ptz::sim;
+using ptz::test::defaultClasses;
+using ptz::test::kGreen;
+using ptz::test::kRed;
+using ptz::test::object;
 
 namespace {
 
-perception::DetectorParams defaultClasses() {
-  cv::FileStorage fs(PTZ_SOURCE_DIR "/config/detect_default.yaml", cv::FileStorage::READ);
-  return perception::DetectorParams::fromConfig(fs["classes"], "detect_default.yaml");
-}
-
-sim::SceneObject object(const std::string& cls, sim::SceneObject::Shape shape,
-                        const Eigen::Vector3d& centre, cv::Vec3b bgr) {
-  sim::SceneObject o;
-  o.name = cls;
-  o.class_name = cls;
-  o.shape = shape;
-  o.radius_m = 0.1;
-  o.half_extents_m = {0.09, 0.09, 0.09};
-  o.color_bgr = bgr;
-  o.trajectory.centre_m = centre;
-  return o;
-}
-
-const cv::Vec3b kRed(30, 30, 210), kGreen(40, 170, 40), kYellow(30, 200, 220);
+const cv::Vec3b kYellow(30, 200, 220);
 
 // Renders a frame of `scene` with both cameras at `left`/`right` (motors settled at once).
 sim::SimFrame render(const StereoRig& rig, const sim::Scene& scene, const PtzPose& left,

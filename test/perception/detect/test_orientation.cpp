@@ -12,19 +12,16 @@
 #include "perception/detect/orientation.hpp"
 #include "perception/detect/stereo.hpp"
 #include "sim/simulator.hpp"
+#include "support/detect_scene.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;
 using ptz::StereoRig;
 namespace perception = ptz::perception;
 namespace sim = ptz::sim;
+using ptz::test::defaultClasses;
 
 namespace {
-
-perception::DetectorParams defaultClasses() {
-  cv::FileStorage fs(PTZ_SOURCE_DIR "/config/detect_default.yaml", cv::FileStorage::READ);
-  return perception::DetectorParams::fromConfig(fs["classes"], "detect_default.yaml");
-}
 
 int classIndex(const perception::DetectorParams& p, const std::string& name) {
   for (size_t i = 0; i < p.classes.size(); ++i) {

@@ -15,6 +15,7 @@
 #include "perception/detect/tracker.hpp"
 #include "perception/detect/windows.hpp"
 #include "sim/simulator.hpp"
+#include "support/detect_scene.hpp"
 
 using ptz::CameraView;
 using ptz::PtzPose;
@@ -22,13 +23,12 @@ using ptz::Side;
 using ptz::StereoRig;
 namespace perception = ptz::perception;
 namespace sim = ptz::sim;
+using ptz::test::defaultClasses;
+using ptz::test::kGreen;
+using ptz::test::kRed;
+using ptz::test::object;
 
 namespace {
-
-perception::DetectorParams defaultClasses() {
-  cv::FileStorage fs(PTZ_SOURCE_DIR "/config/detect_default.yaml", cv::FileStorage::READ);
-  return perception::DetectorParams::fromConfig(fs["classes"], "detect_default.yaml");
-}
 
 // A pinhole camera at the head's origin looking along +z, no distortion.
 CameraView pinhole() {
@@ -54,19 +54,7 @@ perception::Track confirmedAt(const Eigen::Vector3d& p, double radius_m, double 
   return t;
 }
 
-sim::SceneObject object(const std::string& cls, sim::SceneObject::Shape shape,
-                        const Eigen::Vector3d& centre, cv::Vec3b bgr) {
-  sim::SceneObject o;
-  o.name = cls;
-  o.class_name = cls;
-  o.shape = shape;
-  o.radius_m = 0.1;
-  o.half_extents_m = {0.09, 0.09, 0.09};
-  o.color_bgr = bgr;
-  o.trajectory.centre_m = centre;
-  return o;
-}
-const cv::Vec3b kRed(30, 30, 210), kGreen(40, 170, 40), kBlue(200, 60, 30);
+const cv::Vec3b kBlue(200, 60, 30);
 
 // A simulator whose motors reach the pose at once.
 std::unique_ptr<sim::Simulator> simulator(const StereoRig& rig, const sim::Scene& scene,
