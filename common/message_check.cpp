@@ -385,4 +385,23 @@ bool checkFrameMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int
   return true;
 }
 
+bool checkPreviewMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int height,
+                            std::string* why) {
+  const int64_t rig_w = width, rig_h = height;
+  for (const ptzstereo::image_t* im : {&frame.left, &frame.right}) {
+    const int64_t w = im->width, h = im->height;
+    if (w >= 16 && w <= rig_w && h >= 1 && h <= rig_h && std::abs(w * rig_h - h * rig_w) <= rig_w &&
+        im->pixel_format != ptzstereo::image_t::PIXEL_GRAY8) {
+      continue;
+    }
+    *why = std::string("the ") + (im == &frame.left ? "left" : "right") + " preview is " +
+           std::to_string(w) + "x" + std::to_string(h) +
+           (im->pixel_format == ptzstereo::image_t::PIXEL_GRAY8 ? " gray" : " colour") +
+           ", not a colour image of the rig's " + std::to_string(width) + "x" +
+           std::to_string(height) + " shape";
+    return false;
+  }
+  return true;
+}
+
 }  // namespace ptz

@@ -53,5 +53,9 @@ bool checkStereoFrame(const ptzstereo::stereo_frame_t& frame, int max_side_px, s
 // needs; checked before a pixel is decoded, it bounds what a frame may cost. why names the side.
 bool checkFrameMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int height,
                           std::string* why);
+// A preview of such a rig (STEREO_PREVIEW): both images in colour, at least 16 px wide, no
+// larger than width x height and of its shape to a pixel.
+bool checkPreviewMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int height,
+                            std::string* why);
 
 }  // namespace ptz

@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <thread>
 #include <tuple>
 
 namespace ptz {
@@ -66,6 +67,70 @@ bool warnIfReceiveBufferSmall(const std::string& url) {
     ok = false;
   }
   return ok;
+}
+
+void addFrameOutputParams(Params& params) {
+  params.add("frame_lcm_url", "",
+             "LCM URL of the bulky data this process publishes (frames, clouds); empty: lcm_url. "
+             "Several hosts: lcm_url's group and port with ttl=0 keeps them on this host");
+}
+
+FrameOutput::FrameOutput(const Params& params, lcm::LCM& lcm)
+    : shared_(&lcm), url_(params.getString("frame_lcm_url")) {
+  if (url_.empty() || url_ == lcmUrl(params)) {
+    url_ = lcmUrl(params);
+    return;
+  }
+  own_ = std::make_unique<lcm::LCM>(url_);
+  if (!own_->good()) {
+    throw params.invalid("frame_lcm_url", "LCM cannot open '" + url_ + "'");
+  }
+}
+
+void addPreviewParams(Params& params) {
+  params.add("preview_rate_hz", 0.0, "Hz",
+             "rate of STEREO_PREVIEW, small JPEG copies of the frames for a monitoring host "
+             "(0: none)",
+             Range::between(0, 1000));
+  params.add("preview_width_px", 320, "px", "width of each preview image (height to scale)",
+             Range::between(16, 4096));
+  params.add("preview_jpeg_quality", 60, "", "JPEG quality of the previews",
+             Range::between(1, 100));
+  params.add("preview_max_bytes", 60000, "bytes",
+             "a larger preview is not sent (one LCM datagram holds about 64 kB)",
+             Range::between(1000, kLcmLargestDatagramBytes));
+}
+
+PreviewOutput::PreviewOutput(const Params& params)
+    : schedule_(params.getDouble("preview_rate_hz")),
+      width_px_(params.getInt("preview_width_px")),
+      jpeg_quality_(params.getInt("preview_jpeg_quality")),
+      max_bytes_(params.getInt("preview_max_bytes")),
+      channel_(channel(params, channels::kStereoPreview)) {}
+
+void PreviewOutput::maybePublish(StatusReporter& status, lcm::LCM& lcm, int64_t utime, int64_t seq,
+                                 const cv::Mat& left, const PtzPose& left_pose,
+                                 const cv::Mat& right, const PtzPose& right_pose,
+                                 bool utime_is_wall_clock) {
+  if (left.empty() || right.empty() || !schedule_.take(utime)) return;
+  const auto scaled = [&](const cv::Mat& image) {
+    const int width_px = std::min(width_px_, image.cols);  // smaller, never larger
+    const int height_px = std::max(
+        1, static_cast<int>(std::lround(static_cast<double>(width_px) * image.rows / image.cols)));
+    cv::Mat small;
+    cv::resize(image, small, cv::Size(width_px, height_px), 0, 0, cv::INTER_AREA);
+    return small;
+  };
+  ptzstereo::stereo_frame_t msg =
+      makeStereoFrame(utime, seq, scaled(left), left_pose, scaled(right), right_pose,
+                      ptzstereo::image_t::ENCODING_JPEG, jpeg_quality_);
+  if (msg.getEncodedSize() > max_bytes_) {
+    status.increment("previews_too_large");
+    return;
+  }
+  msg.publish_utime = wallUtime();
+  status.publishOn(lcm, channel_, msg,
+                   utime_is_wall_clock ? (msg.publish_utime - utime) / 1000.0 : -1);
 }
 
 std::string channel(const Params& params, const std::string& base) {
@@ -316,7 +381,22 @@ bool StatusReporter::maybePublish() {
   return true;
 }
 
+namespace {
+const char* stateName(int8_t state) {
+  using S = ptzstereo::process_status_t;
+  return state == S::STATE_OK ? "OK" : state == S::STATE_WARN ? "WARN" : "ERROR";
+}
+}  // namespace
+
 void StatusReporter::publishNow() {
+  send(1);
+}
+
+void StatusReporter::publishLast() {
+  send(kLastStatusCopies);
+}
+
+void StatusReporter::send(int copies) {
   const int64_t now = clock_();
   const double period_s = std::max(1e-6, (now - last_publish_utime_) * 1e-6);
   ptzstereo::process_status_t msg{};
@@ -342,7 +422,16 @@ void StatusReporter::publishNow() {
   msg.num_channels = static_cast<int32_t>(msg.channels.size());
   for (const auto& [name, value] : counters_) msg.counters.push_back({name, value});
   msg.num_counters = static_cast<int32_t>(msg.counters.size());
-  if (lcm_->publish(channel_, &msg) != 0) publishFailed(channel_);
+  for (int i = 0; i < copies; ++i) {
+    // Copies apart in time, so that a burst of loss takes at most one.
+    if (i > 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    if (lcm_->publish(channel_, &msg) != 0) publishFailed(channel_);
+  }
+  if (msg.state != said_state_) {  // a change of health goes to stderr too (journals, scripts)
+    std::fprintf(stderr, "%s: %s%s%s\n", process_.c_str(), stateName(msg.state),
+                 msg.message.empty() ? "" : ": ", msg.message.c_str());
+    said_state_ = msg.state;
+  }
   last_publish_utime_ = now;
   if (!announced_) {
     announced_ = true;
@@ -435,7 +524,7 @@ int serveUntilStopped(lcm::LCM& lcm, StatusReporter& status) {
     handleNewest(lcm, 100);
     status.maybePublish();
   }
-  status.publishNow();
+  status.publishLast();
   return 0;
 }
 

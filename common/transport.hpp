@@ -6,9 +6,11 @@
 #include <opencv2/core.hpp>
 
 #include <atomic>
+#include <cerrno>
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <type_traits>
@@ -35,12 +37,60 @@ std::string lcmUrl(const Params& params);
 // Warns on stderr (with the exact fix) when a udpm URL asks for no receive buffer or for one
 // larger than net.core.rmem_max allows: raw VGA stereo frames are then lost. Returns false then.
 bool warnIfReceiveBufferSmall(const std::string& url);
+// Declares frame_lcm_url, for the processes that publish bulky data (frames, clouds).
+void addFrameOutputParams(Params& params);
+
+// Where a process publishes its bulky data (STEREO_FRAME, POINT_CLOUD, DISPARITY_IMAGE): a second
+// LCM at frame_lcm_url, else the process's own. On a LAN the same group and port at ttl=0 keeps
+// them on this host, where its own consumers hear them, while the rest crosses at ttl=1: one lost
+// IP fragment loses a whole frame (DESIGN.md, Several hosts). Throws ConfigError when it cannot
+// open.
+class FrameOutput {
+ public:
+  FrameOutput(const Params& params, lcm::LCM& lcm);
+  lcm::LCM& lcm() { return own_ ? *own_ : *shared_; }
+  const std::string& url() const { return url_; }
+
+ private:
+  lcm::LCM* shared_;
+  std::unique_ptr<lcm::LCM> own_;
+  std::string url_;
+};
+
+class StatusReporter;
+
+// Declares preview_rate_hz, preview_width_px, preview_jpeg_quality and preview_max_bytes.
+void addPreviewParams(Params& params);
+
+// Small JPEG copies of the frames on STEREO_PREVIEW (the same type), for a monitoring host when
+// the frames themselves stay on the host that makes them: bounded in rate and in bytes, so that
+// one fits one datagram (DESIGN.md, Several hosts).
+class PreviewOutput {
+ public:
+  explicit PreviewOutput(const Params& params);
+  bool enabled() const { return schedule_.enabled(); }
+  // When one is due by capture time: both images scaled down to preview_width_px, published on
+  // lcm. One over preview_max_bytes is not sent (previews_too_large). The latency is counted only
+  // where utime is wall-clock time (not in lockstep).
+  void maybePublish(StatusReporter& status, lcm::LCM& lcm, int64_t utime, int64_t seq,
+                    const cv::Mat& left, const PtzPose& left_pose, const cv::Mat& right,
+                    const PtzPose& right_pose, bool utime_is_wall_clock = true);
+
+ private:
+  RateSchedule schedule_;
+  int width_px_;
+  int jpeg_quality_;
+  int64_t max_bytes_;
+  std::string channel_;
+};
+
 // Channel name with the configured prefix (lets a simulated and a real rig share a network).
 std::string channel(const Params& params, const std::string& base);
 
 // Channel names of the message contract (DESIGN.md).
 namespace channels {
 constexpr const char* kStereoFrame = "STEREO_FRAME";
+constexpr const char* kStereoPreview = "STEREO_PREVIEW";
 constexpr const char* kPtzState = "PTZ_STATE";
 constexpr const char* kPtzSetpoint = "PTZ_SETPOINT";
 constexpr const char* kSimTruth = "SIM_TRUTH";
@@ -50,6 +100,7 @@ constexpr const char* kObjectTracks = "OBJECT_TRACKS";
 constexpr const char* kTargetSelect = "TARGET_SELECT";
 constexpr const char* kControlState = "CONTROL_STATE";
 constexpr const char* kPointCloud = "POINT_CLOUD";
+constexpr const char* kPointCloudPreview = "POINT_CLOUD_PREVIEW";
 constexpr const char* kDisparityImage = "DISPARITY_IMAGE";
 constexpr const char* kProcessStatusPrefix = "PROCESS_STATUS_";
 }  // namespace channels
@@ -87,6 +138,11 @@ class StopFlag {
   static bool stopRequested();
   static void request();
 };
+
+// LCM 1.3.1 returns 0 for a message it sends in fragments (one over this size: every frame) even
+// when the sends failed (no route: a link went down); the errno they leave says so, and nothing
+// else on that path sets it.
+constexpr int kLcmLargestDatagramBytes = 65'000;
 
 // Warns on stderr at most once per period per key, with the count since the last warning.
 class RateLimitedLog {
@@ -129,7 +185,15 @@ class StatusReporter {
   // stderr naming the channel and the error. Returns whether LCM took it.
   template <class Msg>
   bool publish(const std::string& channel, const Msg& msg, double latency_ms = -1) {
-    if (lcm_->publish(channel, &msg) != 0) {
+    return publishOn(*lcm_, channel, msg, latency_ms);
+  }
+  // The same on another LCM (a FrameOutput's).
+  template <class Msg>
+  bool publishOn(lcm::LCM& lcm, const std::string& channel, const Msg& msg,
+                 double latency_ms = -1) {
+    errno = 0;
+    if (lcm.publish(channel, &msg) != 0 ||
+        (msg.getEncodedSize() > kLcmLargestDatagramBytes && errno != 0)) {
       publishFailed(channel);
       return false;
     }
@@ -139,6 +203,9 @@ class StatusReporter {
   // Publishes when a period has passed; returns true when it did. Feeds the watchdog.
   bool maybePublish();
   void publishNow();
+  // The last status of a process that stops, sent kLastStatusCopies times: over a lossy link its
+  // final counters (frames published, ...) still arrive.
+  void publishLast();
   const std::string& channelName() const { return channel_; }
   const std::string& process() const { return process_; }
   // The state and message publishNow would send now.
@@ -147,6 +214,7 @@ class StatusReporter {
   void useClock(std::function<int64_t()> clock) { clock_ = std::move(clock); }
 
   static constexpr double kPublishErrorHoldS = 5.0;
+  static constexpr int kLastStatusCopies = 3;
 
  private:
   struct ChannelStats {
@@ -163,6 +231,7 @@ class StatusReporter {
   };
   ChannelStats& stats(const std::string& channel, int8_t direction);
   void publishFailed(const std::string& channel);
+  void send(int copies);
   void feedWatchdog(int64_t now_utime);
 
   lcm::LCM* lcm_;
@@ -177,6 +246,7 @@ class StatusReporter {
   int64_t last_watchdog_utime_ = 0;
   bool announced_ = false;
   int8_t state_ = ptzstereo::process_status_t::STATE_OK;
+  int8_t said_state_ = ptzstereo::process_status_t::STATE_OK;  // the last state on stderr
   std::string message_;
   std::map<std::string, ChannelStats> channels_;
   std::map<std::string, Expected> expected_;

@@ -16,7 +16,7 @@ PTZ_PACKAGES=(
   libgstrtspserver-1.0-dev
   gstreamer1.0-tools
   default-jdk-headless libjchart2d-java
-  iproute2 xvfb x11-apps imagemagick xdotool gnuplot-nox
+  iproute2 nftables xvfb x11-apps imagemagick xdotool gnuplot-nox
 )
 
 ptz_sudo() {

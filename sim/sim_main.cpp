@@ -27,6 +27,8 @@ constexpr int64_t kLockstepEpochUtime = 1'700'000'000'000'000;
 
 void declare(Params& p) {
   addTransportParams(p);
+  addFrameOutputParams(p);
+  addPreviewParams(p);
   addPlantParams(p);
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   p.add("clock", "realtime", "realtime or lockstep");
@@ -67,6 +69,8 @@ class SimNode {
       : p_(p),
         lcm_(lcm),
         status_(lcm, p, "ptz-sim"),
+        bulk_out_(p, *lcm),
+        preview_(p),
         lockstep_(p.getString("clock") == "lockstep"),
         frame_period_s_(1.0 / p.getDouble("frame_rate_hz")),
         state_period_s_(1.0 / p.getDouble("state_rate_hz")),
@@ -123,7 +127,7 @@ class SimNode {
     }
     stopVisca();
     reportVisca();
-    status_.publishNow();
+    status_.publishLast();
     std::printf("ptz-sim: %lld frames published, %lld setpoints applied\n",
                 static_cast<long long>(status_.counter("frames_published")),
                 static_cast<long long>(status_.counter("setpoints_applied")));
@@ -231,8 +235,14 @@ class SimNode {
         makeFrameMessage(frame, utime, encoding_, p_.getInt("jpeg_quality"));
     const int64_t now = wallUtime();
     msg.publish_utime = now;
-    status_.publish(ch_frame_, msg, lockstep_ ? -1 : (now - utime) / 1000.0);
-    status_.increment("frames_published");
+    // A frame LCM did not take (no route: a link went down) is not published; it is counted as
+    // STEREO_FRAME.publish_failures, and the run's numbers count its time as lost.
+    if (status_.publishOn(bulk_out_.lcm(), ch_frame_, msg,
+                          lockstep_ ? -1 : (now - utime) / 1000.0)) {
+      status_.increment("frames_published");
+    }
+    preview_.maybePublish(status_, *lcm_, utime, frame.index, frame.left, frame.left_pose,
+                          frame.right, frame.right_pose, !lockstep_);
     truth.publish_utime = wallUtime();
     status_.publish(ch_truth_, truth);
   }
@@ -285,6 +295,12 @@ class SimNode {
     const PtzPose r{msg->right.pan_rad, msg->right.tilt_rad, msg->right.zoom};
     sim_->command(t_apply, l, r, &clamped, &rejected);
     status_.countIn(ch, lockstep_ ? -1 : (wallUtime() - msg->utime) / 1000.0);
+    // Once a controller has spoken, its silence is news (a lost link, a dead host); before, the
+    // rig may be running open loop on purpose.
+    if (!lockstep_ && !setpoints_expected_) {
+      status_.expectInput(ch, 1.0, 5.0);
+      setpoints_expected_ = true;
+    }
     status_.increment("setpoints_applied");
     if (clamped) status_.increment("setpoint_values_clamped", clamped);
     if (rejected) {
@@ -299,6 +315,8 @@ class SimNode {
   const Params& p_;
   lcm::LCM* lcm_;
   StatusReporter status_;
+  FrameOutput bulk_out_;
+  PreviewOutput preview_;
   RateLimitedLog log_;
   bool lockstep_;
   double frame_period_s_, state_period_s_;
@@ -322,6 +340,7 @@ class SimNode {
   int64_t awaiting_seq_ = -1;
   bool answered_ = false;
   int64_t last_setpoint_utime_ = 0;
+  bool setpoints_expected_ = false;
 };
 
 }  // namespace

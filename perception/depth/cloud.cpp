@@ -120,6 +120,39 @@ bool toPcl(const ptzstereo::point_cloud_t& m, pcl::PCLPointCloud2* c) {
 
 }  // namespace
 
+ptzstereo::point_cloud_t decimateCloud(const ptzstereo::point_cloud_t& cloud, int64_t max_bytes) {
+  ptzstereo::point_cloud_t out;  // the header alone: the data is picked below
+  out.utime = cloud.utime;
+  out.publish_utime = cloud.publish_utime;
+  out.frame_seq = cloud.frame_seq;
+  out.frame_id = cloud.frame_id;
+  out.is_dense = cloud.is_dense;
+  out.is_bigendian = cloud.is_bigendian;
+  out.num_fields = cloud.num_fields;
+  out.fields = cloud.fields;
+  out.point_step = cloud.point_step;
+  out.width = 0;
+  out.height = 1;
+  const int64_t step = cloud.point_step;
+  const int64_t points = static_cast<int64_t>(cloud.width) * cloud.height;
+  if (step <= 0 || points <= 0 || points * step != static_cast<int64_t>(cloud.data.size()) ||
+      max_bytes < step) {
+    out.row_step = 0;
+    out.data_size = 0;
+    return out;
+  }
+  const int64_t keep_at_most = max_bytes / step;
+  const int64_t k = (points + keep_at_most - 1) / keep_at_most;
+  for (int64_t i = 0; i < points; i += k) {
+    const auto from = cloud.data.begin() + static_cast<ptrdiff_t>(i * step);
+    out.data.insert(out.data.end(), from, from + static_cast<ptrdiff_t>(step));
+  }
+  out.width = static_cast<int32_t>(out.data.size() / static_cast<size_t>(step));
+  out.row_step = out.width * cloud.point_step;
+  out.data_size = static_cast<int32_t>(out.data.size());
+  return out;
+}
+
 bool cloudPoints(const ptzstereo::point_cloud_t& m, std::vector<cv::Point3f>* points) {
   pcl::PCLPointCloud2 packed;
   if (!toPcl(m, &packed)) return false;

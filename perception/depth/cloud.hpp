@@ -32,6 +32,11 @@ ptzstereo::point_cloud_t makeCloud(const std::vector<cv::Point3f>& points_head_m
                                    const std::vector<cv::Vec3b>& colours_bgr,
                                    const CloudParams& params);
 
+// Every k-th point of a cloud made by makeCloud, k the smallest that keeps its data within
+// max_bytes: a preview that crosses a LAN in one datagram. An empty cloud for a layout it does
+// not know (point_step or sizes that disagree).
+ptzstereo::point_cloud_t decimateCloud(const ptzstereo::point_cloud_t& cloud, int64_t max_bytes);
+
 // The xyz of every point of a cloud in PCL's layout (NaN points skipped); false if the layout
 // has no float x, y, z fields or its sizes disagree.
 bool cloudPoints(const ptzstereo::point_cloud_t& cloud, std::vector<cv::Point3f>* points);

@@ -22,6 +22,7 @@ namespace {
 
 void declare(Params& p) {
   addTransportParams(p);
+  addFrameOutputParams(p);
   p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
   declareDepthParams(p);
   declareCloudParams(p);
@@ -32,6 +33,12 @@ void declare(Params& p) {
         "write clouds as binary PCD here ({seq} is replaced by the frame's seq); empty: none");
   p.add("pcd_every_n", 0, "", "write every n-th cloud (0: the first only)", Range::atLeast(0));
   p.add("publish_disparity", false, "publish the disparity on DISPARITY_IMAGE (grey, raw)");
+  p.add("cloud_preview_rate_hz", 0.0, "Hz",
+        "rate of POINT_CLOUD_PREVIEW, every k-th point of the cloud on lcm_url, for another "
+        "host when the clouds stay on this one (0: none)",
+        Range::between(0, 1000));
+  p.add("cloud_preview_max_bytes", 24000, "bytes", "the preview's points within this many bytes",
+        Range::between(1000, kLcmLargestDatagramBytes));
 }
 
 class DepthNode {
@@ -39,6 +46,10 @@ class DepthNode {
   DepthNode(const Params& p, lcm::LCM* lcm, StereoRig rig)
       : lcm_(lcm),
         status_(lcm, p, "ptz-depth"),
+        bulk_out_(p, *lcm),
+        cloud_preview_schedule_(p.getDouble("cloud_preview_rate_hz")),
+        cloud_preview_max_bytes_(p.getInt("cloud_preview_max_bytes")),
+        ch_cloud_preview_(channel(p, channels::kPointCloudPreview)),
         estimator_(std::move(rig), DepthParams::fromParams(p)),
         cloud_params_(CloudParams::fromParams(p)),
         target_max_age_us_(static_cast<int64_t>(p.getDouble("target_max_age_s") * 1e6)),
@@ -135,7 +146,7 @@ class DepthNode {
     cloud.utime = m.utime;
     cloud.frame_seq = m.seq;
     cloud.publish_utime = wallUtime();
-    status_.publish(ch_cloud_, cloud, latencyMs(m.utime, cloud.publish_utime));
+    status_.publishOn(bulk_out_.lcm(), ch_cloud_, cloud, latencyMs(m.utime, cloud.publish_utime));
     if (publish_disparity_) publishDisparity(m);
     ++clouds_;
     status_.increment("frames_processed");
@@ -145,6 +156,10 @@ class DepthNode {
     status_.setCounter("min_disparity_px", depth_.min_disparity_px);
     status_.setCounter("rectification_rebuilds", estimator_.rectifier().rebuilds());
     if (target) status_.increment("frames_following_target");
+    if (cloud_preview_schedule_.take(m.utime)) {
+      ptzstereo::point_cloud_t preview = decimateCloud(cloud, cloud_preview_max_bytes_);
+      status_.publish(ch_cloud_preview_, preview, latencyMs(m.utime, preview.publish_utime));
+    }
     maybeWritePcd(cloud);
     status_.setPercentilesUs("processing", &processing_ms_, 10);
   }
@@ -160,7 +175,7 @@ class DepthNode {
     img.pan_rad = m.left.pan_rad;
     img.tilt_rad = m.left.tilt_rad;
     img.zoom = m.left.zoom;
-    status_.publish(ch_disparity_, img, latencyMs(m.utime, wallUtime()));
+    status_.publishOn(bulk_out_.lcm(), ch_disparity_, img, latencyMs(m.utime, wallUtime()));
   }
 
   void maybeWritePcd(const ptzstereo::point_cloud_t& cloud) {
@@ -182,6 +197,10 @@ class DepthNode {
 
   lcm::LCM* lcm_;
   StatusReporter status_;
+  FrameOutput bulk_out_;
+  RateSchedule cloud_preview_schedule_;
+  int64_t cloud_preview_max_bytes_;
+  std::string ch_cloud_preview_;
   RateLimitedLog log_;
   DepthEstimator estimator_;
   CloudParams cloud_params_;

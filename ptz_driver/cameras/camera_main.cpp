@@ -39,6 +39,8 @@ class CameraNode {
   CameraNode(const Params& p, lcm::LCM* lcm)
       : lcm_(lcm),
         status_(lcm, p, "ptz-camera"),
+        bulk_out_(p, *lcm),
+        preview_(p),
         encoding_(imageEncodingFrom(p)),
         jpeg_quality_(p.getInt("jpeg_quality")),
         ch_frame_(channel(p, channels::kStereoFrame)),
@@ -78,7 +80,7 @@ class CameraNode {
       if (camera_->finished()) break;  // both files played to their end
     }
     report(wallUtime());
-    status_.publishNow();
+    status_.publishLast();
     return 0;
   }
 
@@ -123,7 +125,9 @@ class CameraNode {
         makeStereoFrame(p.left.capture_utime, seq_++, p.left.image, p.left_pose, p.right.image,
                         p.right_pose, encoding_, jpeg_quality_);
     msg.publish_utime = wallUtime();
-    status_.publish(ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
+    status_.publishOn(bulk_out_.lcm(), ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
+    preview_.maybePublish(status_, *lcm_, msg.utime, msg.seq, p.left.image, p.left_pose,
+                          p.right.image, p.right_pose);
     wait_ms_.push_back((msg.publish_utime - p.first_arrival_utime) / 1000.0);
     ptz_wait_ms_.push_back(p.ptz_wait_us / 1000.0);
   }
@@ -164,6 +168,8 @@ class CameraNode {
 
   lcm::LCM* lcm_;
   StatusReporter status_;
+  FrameOutput bulk_out_;
+  PreviewOutput preview_;
   RateLimitedLog log_;
   int8_t encoding_;
   int jpeg_quality_;
@@ -190,6 +196,8 @@ int main(int argc, char** argv) {
                 "-> STEREO_FRAME, paired by capture time and stamped with each camera's "
                 "pan/tilt/zoom from PTZ_STATE; reconnects lost cameras with back-off.");
   addTransportParams(params);
+  addFrameOutputParams(params);
+  addPreviewParams(params);
   driver::declareCameraParams(params);
   addImageEncodingParams(params);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {

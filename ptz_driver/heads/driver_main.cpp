@@ -91,7 +91,7 @@ class DriverNode {
       status_.maybePublish();
     }
     stopper.stop();
-    status_.publishNow();
+    status_.publishLast();
     return 0;
   }
 

@@ -336,3 +336,30 @@ TEST(MessageCheck, ControlStateReasonIsOneNulTerminatedString) {
   EXPECT_TRUE(ptz::decodeChecked(good.data(), good.size(), &back, &why)) << why;
   EXPECT_EQ(back.reason, "coasting");
 }
+
+// A preview must be a colour image of the rig's shape and no larger than it: what a viewer scales
+// up to the rig's size under its overlay.
+TEST(MessageCheck, APreviewIsASmallerColourImageOfTheRigsShape) {
+  const auto preview = [](int w, int h, int channels) {
+    ptzstereo::stereo_frame_t f{};
+    f.left = f.right = ptz::encodeImage(cv::Mat(h, w, CV_8UC(channels), cv::Scalar::all(7)),
+                                        ptzstereo::image_t::ENCODING_RAW, 90);
+    return f;
+  };
+  std::string why;
+  EXPECT_TRUE(ptz::checkPreviewMatchesRig(preview(320, 240, 3), 640, 480, &why)) << why;
+  EXPECT_TRUE(ptz::checkPreviewMatchesRig(preview(160, 121, 3), 640, 480, &why)) << why;
+  EXPECT_TRUE(ptz::checkPreviewMatchesRig(preview(640, 480, 3), 640, 480, &why)) << why;
+  EXPECT_FALSE(ptz::checkPreviewMatchesRig(preview(1280, 960, 3), 640, 480, &why));
+  EXPECT_NE(why.find("left preview is 1280x960 colour"), std::string::npos) << why;
+  EXPECT_FALSE(ptz::checkPreviewMatchesRig(preview(320, 200, 3), 640, 480, &why));  // 16:10
+  EXPECT_FALSE(ptz::checkPreviewMatchesRig(preview(8, 6, 3), 640, 480, &why));      // too small
+  EXPECT_FALSE(ptz::checkPreviewMatchesRig(preview(320, 240, 1), 640, 480, &why));
+  EXPECT_NE(why.find("gray"), std::string::npos) << why;
+  // Hostile sizes: no overflow in the shape test.
+  ptzstereo::stereo_frame_t f = preview(320, 240, 3);
+  f.right.width = INT32_MAX;
+  f.right.height = INT32_MAX;
+  EXPECT_FALSE(ptz::checkPreviewMatchesRig(f, 640, 480, &why));
+  EXPECT_NE(why.find("right preview"), std::string::npos) << why;
+}

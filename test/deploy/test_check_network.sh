@@ -34,6 +34,8 @@ within() {
 ip link set lo up
 unshare -n sleep 600 &
 b_pid=$!
+# Host B exists once its process has left this network namespace.
+until [ "$(readlink "/proc/$b_pid/ns/net")" != "$(readlink /proc/$$/ns/net)" ]; do sleep 0.01; done
 trap 'kill $b_pid $watch_pid 2>/dev/null' EXIT
 watch_pid=""
 on_b() { nsenter -t "$b_pid" -n "$@"; }

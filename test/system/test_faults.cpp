@@ -410,3 +410,32 @@ TEST_F(Faults, AProcessThatCannotPublishSaysSo) {
   EXPECT_GT(w.counter("ptz-detect", "publish_failures"), 0);
   EXPECT_TRUE(detect.running());
 }
+
+// LCM 1.3.1 says a message it sends in fragments (a frame) went out even when no route took it:
+// the status counts it as a failure all the same, and a small message too.
+TEST_F(Faults, AFrameWithNoRouteIsCountedAsNotPublished) {
+  ptz::Params params("ptz-test", "");
+  ptz::addTransportParams(params);
+  ptz::StatusReporter status(&lcm, params, "ptz-test");
+  const cv::Mat image(240, 320, CV_8UC3, cv::Scalar(1, 2, 3));  // 230 kB raw: fragmented
+  const ptzstereo::stereo_frame_t frame =
+      ptz::makeStereoFrame(1, 1, image, {}, image, {}, ptzstereo::image_t::ENCODING_RAW, 90);
+  ASSERT_GT(frame.getEncodedSize(), ptz::kLcmLargestDatagramBytes);
+  ptzstereo::ptz_state_t small{};
+  ASSERT_TRUE(status.publishOn(lcm, "STEREO_FRAME", frame));
+  ASSERT_TRUE(status.publishOn(lcm, "PTZ_STATE", small));
+  ASSERT_EQ(std::system("ip route del 224.0.0.0/4 dev lo"), 0);
+  testing::internal::CaptureStderr();
+  const bool frame_sent = status.publishOn(lcm, "STEREO_FRAME", frame);
+  const bool state_sent = status.publishOn(lcm, "PTZ_STATE", small);
+  testing::internal::GetCapturedStderr();
+  ASSERT_EQ(std::system("ip route add 224.0.0.0/4 dev lo"), 0);
+  EXPECT_FALSE(frame_sent);
+  EXPECT_FALSE(state_sent);
+  EXPECT_EQ(status.counter("STEREO_FRAME.publish_failures"), 1);
+  EXPECT_EQ(status.counter("PTZ_STATE.publish_failures"), 1);
+  EXPECT_EQ(status.health().first, ptzstereo::process_status_t::STATE_ERROR);
+  // The route back: sent again, and nothing counted that was not.
+  EXPECT_TRUE(status.publishOn(lcm, "STEREO_FRAME", frame));
+  EXPECT_EQ(status.counter("STEREO_FRAME.publish_failures"), 1);
+}

@@ -38,6 +38,13 @@ struct Listener {
   std::map<std::string, std::map<std::string, int64_t>> counters;
   std::vector<ptzstereo::target_select_t> selects;
   int64_t last_frame_seq = -1;
+  // The detections, poses, frames and statuses on lcm.
+  void listen(lcm::LCM& lcm) {
+    lcm.subscribe("OBJECT_DETECTIONS", &Listener::onDetections, this);
+    lcm.subscribe("OBJECT_POSE", &Listener::onPose, this);
+    lcm.subscribe("STEREO_FRAME", &Listener::onFrame, this);
+    lcm.subscribe("PROCESS_STATUS_.*", &Listener::onStatus, this);
+  }
   void onSelect(const lcm::ReceiveBuffer*, const std::string&,
                 const ptzstereo::target_select_t* m) {
     selects.push_back(*m);
@@ -307,10 +314,7 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
 
   lcm::LCM lcm(ptz::test::kTestUrl);
   Listener l;
-  lcm.subscribe("OBJECT_DETECTIONS", &Listener::onDetections, &l);
-  lcm.subscribe("OBJECT_POSE", &Listener::onPose, &l);
-  lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
-  lcm.subscribe("PROCESS_STATUS_.*", &Listener::onStatus, &l);
+  l.listen(lcm);
   const std::string shots = std::string(::testing::TempDir()) + "/view_shots";
   ::mkdir(shots.c_str(), 0755);
   ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
@@ -396,6 +400,65 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
   // q quits cleanly.
   ASSERT_EQ(shell("xdotool search --name ptz-view key q"), 0);
   EXPECT_EQ(view.wait(10s), 0);
+}
+
+// A monitoring host sees STEREO_PREVIEW, not the frames: scaled up to the rig's size, the ball is
+// where ptz-detect found it in the full frames, under its outline.
+TEST(View, APreviewIsDrawnAtTheRigsSizeUnderTheOverlay) {
+  std::unique_ptr<ChildProcess> xvfb;
+  startX(&xvfb);
+  if (HasFatalFailure()) return;
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  Listener l;
+  l.listen(lcm);
+  const std::string shots = std::string(::testing::TempDir()) + "/view_preview_shots";
+  shell("rm -rf '" + shots + "'");
+  ::mkdir(shots.c_str(), 0755);
+  ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                       PTZ_SOURCE_DIR "/config/detect_default.yaml"});
+  ChildProcess view({PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl, "--preview", "true",
+                     "--screenshot-dir", shots, "--screenshot-after-frames", "3", "--max-wait-s",
+                     "5"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-view"]["up"]; }, 30s));
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                    PTZ_SOURCE_DIR "/config/sim_paper.yaml", "--clock", "realtime", "--encoding",
+                    "jpeg", "--frames", "90", "--preview-rate-hz", "10", "--preview-width-px",
+                    "160"});
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-view"]["screenshots"] >= 1; }, 30s))
+      << "ptz-view drew " << l.counters["ptz-view"]["frames_drawn"] << " previews";
+  ptz::test::handleUntil(
+      lcm, [&] { return sim.wait(0ms) >= 0; }, 30s);
+  EXPECT_EQ(l.counters["ptz-view"]["STEREO_PREVIEW.dropped_size_mismatch"], 0);
+  cv::Mat canvas;
+  int64_t seq = -1;
+  for (int64_t n = 0; n < 90 && canvas.empty(); ++n) {
+    const std::string path = shots + "/ptz-view-" + std::to_string(n) + ".png";
+    if (exists(path)) canvas = cv::imread(path);
+    seq = n;
+  }
+  ASSERT_FALSE(canvas.empty()) << "no screenshot in " << shots;
+  EXPECT_EQ(seq % 3, 0) << "previews at 10 Hz are every third frame";
+  ASSERT_EQ(canvas.cols, 2 * 640);
+  EXPECT_TRUE(near(canvas.at<cv::Vec3b>(240 - 10, 320), ptz::tools::kCentreColour));
+  ASSERT_TRUE(l.detections.count(seq) && l.poses.count(seq)) << "frame " << seq;
+  const auto& pose = l.poses[seq];
+  ASSERT_GE(pose.target_index, 0);
+  const auto& obj = pose.objects[static_cast<size_t>(pose.target_index)];
+  for (int side = 0; side < 2; ++side) {
+    const auto& det = side == 0 ? l.detections[seq].left[static_cast<size_t>(obj.left_index)]
+                                : l.detections[seq].right[static_cast<size_t>(obj.right_index)];
+    // Half a radius below the centre: inside the ball, off the epipolar line through it.
+    const double r_px = std::sqrt(det.area_px2 / M_PI);
+    const cv::Vec3b p =
+        canvas.at<cv::Vec3b>(static_cast<int>(std::lround(det.centroid_y_px + r_px / 2)),
+                             side * 640 + static_cast<int>(det.centroid_x_px));
+    // Red, however the ball is shaded there.
+    EXPECT_TRUE(p[2] > 60 && p[2] > 2 * p[1] && p[2] > 2 * p[0])
+        << "side " << side << ": not the red ball at its detection: " << p;
+  }
+  view.stop();
 }
 
 // Our own frame with two tracks and the controller coasting: the tracks drawn where they project

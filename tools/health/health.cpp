@@ -1,5 +1,7 @@
 #include "tools/health/health.hpp"
 
+#include "common/measure.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -39,11 +41,63 @@ void Board::onStatus(const Status& msg, int64_t receive_utime) {
       return;
     }
     entries_.emplace(key, Entry{msg, receive_utime, 0});
+  } else {
+    if (it->second.status.pid != msg.pid) ++it->second.pid_changes;
+    it->second.status = msg;
+    it->second.receive_utime = receive_utime;
+  }
+  addClockSample(msg.hostname, msg.utime, receive_utime);
+}
+
+void Board::addClockSample(const std::string& hostname, int64_t sent_utime, int64_t receive_utime) {
+  // In double: a hostile utime (INT64_MIN, INT64_MAX) cannot overflow, it is merely absurd.
+  const double delay_us = static_cast<double>(receive_utime) - static_cast<double>(sent_utime);
+  if (!std::isfinite(delay_us) || std::abs(delay_us) > kClockAbsurdS * 1e6) {
+    ++clock_ignored_;
     return;
   }
-  if (it->second.status.pid != msg.pid) ++it->second.pid_changes;
-  it->second.status = msg;
-  it->second.receive_utime = receive_utime;
+  auto it = clock_samples_.find(hostname);
+  if (it == clock_samples_.end()) {
+    if (clock_samples_.size() >= options_.max_processes) return;  // entries_ bounds it already
+    it = clock_samples_.emplace(hostname, std::deque<ClockSample>{}).first;
+  }
+  auto& samples = it->second;
+  samples.push_back({receive_utime, delay_us});
+  const auto too_old = [&](const ClockSample& s) {
+    return static_cast<double>(receive_utime) - static_cast<double>(s.receive_utime) >
+           kClockWindowS * 1e6;
+  };
+  while (samples.size() > kClockWindowStatuses || too_old(samples.front())) {
+    samples.pop_front();
+  }
+}
+
+HostClock Board::clockOf(const std::string& hostname,
+                         const std::deque<ClockSample>& samples) const {
+  HostClock c;
+  c.hostname = hostname;
+  c.own = !options_.own_hostname.empty() && hostname == options_.own_hostname;
+  c.statuses = samples.size();
+  if (samples.empty()) return c;
+  // receive - send = latency - offset and the one-way latency is >= 0, so the smallest delays are
+  // the tightest bound: the estimate is the offset minus a small latency of the window (~0.1-1 ms
+  // on a LAN), never more than the true offset. The second smallest, so that one status stamped
+  // ahead (a process's clock stepped, a forged one) cannot move the host's estimate alone.
+  std::vector<double> delays_us;
+  for (const auto& s : samples) delays_us.push_back(s.delay_us);
+  const size_t rank = std::min<size_t>(1, delays_us.size() - 1);
+  std::nth_element(delays_us.begin(), delays_us.begin() + static_cast<ptrdiff_t>(rank),
+                   delays_us.end());
+  c.offset_ms = -delays_us[rank] * 1e-3;
+  c.too_far = !c.own && c.statuses >= kClockMinStatuses &&
+              std::abs(c.offset_ms) > options_.max_clock_offset_ms;
+  return c;
+}
+
+std::vector<HostClock> Board::clocks() const {
+  std::vector<HostClock> out;
+  for (const auto& [host, samples] : clock_samples_) out.push_back(clockOf(host, samples));
+  return out;
 }
 
 namespace {
@@ -74,9 +128,17 @@ std::vector<InputChannel> inputsOf(const Status& s) {
   return inputs;
 }
 
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
+  return buf;
+}
+
 }  // namespace
 
 std::vector<ProcessReport> Board::judge(int64_t now_utime) const {
+  std::map<std::string, HostClock> clocks;
+  for (const auto& [host, samples] : clock_samples_) clocks.emplace(host, clockOf(host, samples));
   std::vector<ProcessReport> reports;
   std::set<std::string> heard;
   for (const auto& [key, e] : entries_) {
@@ -90,6 +152,17 @@ std::vector<ProcessReport> Board::judge(int64_t now_utime) const {
     r.pid_changes = e.pid_changes;
     r.inputs = inputsOf(e.status);
     r.verdict = r.age_s >= options_.stale_s ? Verdict::kStale : fromState(e.status.state);
+    const auto clock = clocks.find(r.hostname);
+    if (clock != clocks.end()) {
+      r.clock_offset_ms = clock->second.offset_ms;
+      if (clock->second.too_far) {
+        r.clock_message =
+            "clock " + fixed(std::abs(r.clock_offset_ms), 1) + " ms " +
+            (r.clock_offset_ms > 0 ? "ahead of" : "behind") + " this host (max_clock_offset_ms " +
+            formatNumber(options_.max_clock_offset_ms) + "): sync clocks (chrony/PTP)";
+        if (r.verdict == Verdict::kOk) r.verdict = Verdict::kWarn;
+      }
+    }
     heard.insert(r.process);
     reports.push_back(std::move(r));
   }
@@ -113,30 +186,7 @@ int exitCode(const std::vector<ProcessReport>& reports) {
   return kExitOk;
 }
 
-std::string printable(const std::string& text, size_t max_chars) {
-  std::string out;
-  for (unsigned char c : text) {
-    if (out.size() >= max_chars) {
-      out += "...";
-      break;
-    }
-    if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  return out;
-}
-
 namespace {
-std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::isfinite(v) ? v : 0.0);
-  return buf;
-}
 std::string padded(const std::string& s, size_t width) {
   return s.size() >= width ? s + " " : s + std::string(width - s.size(), ' ');
 }
@@ -163,6 +213,7 @@ std::string formatLine(const ProcessReport& r) {
     line += ";";
   }
   if (r.pid_changes > 0) line += " restarted " + std::to_string(r.pid_changes) + "x;";
+  if (!r.clock_message.empty()) line += " " + r.clock_message + ";";
   if (r.verdict == Verdict::kStale) {
     line += " no status for " + fixed(r.age_s, 1) + " s (it last said " +
             verdictName(fromState(r.state)) +
@@ -178,6 +229,27 @@ std::string formatTable(const std::vector<ProcessReport>& reports) {
   std::string out = padded("process", 13) + padded("host", 13) + padded("pid", 8) +
                     padded("state", 8) + padded("age", 8) + " inputs; message\n";
   for (const auto& r : reports) out += formatLine(r) + "\n";
+  return out;
+}
+
+std::string formatClocks(const std::vector<HostClock>& clocks, double max_clock_offset_ms) {
+  const bool other_host =
+      std::any_of(clocks.begin(), clocks.end(), [](const HostClock& c) { return !c.own; });
+  if (!other_host) return "";  // one host: one clock
+  std::string out;
+  for (const auto& c : clocks) {
+    std::string line = "clock  " + padded(printable(c.hostname, 40), 13);
+    if (!std::isfinite(c.offset_ms)) {
+      line += "unknown";
+    } else {
+      const double ms = std::round(c.offset_ms * 10) / 10 + 0.0;  // + 0.0: no "-0.0"
+      line += (ms >= 0 ? "+" : "") + fixed(ms, 1) + " ms (" + std::to_string(c.statuses) +
+              (c.statuses == 1 ? " status)" : " statuses)");
+    }
+    if (c.own) line += " this host";
+    if (c.too_far) line += " over max_clock_offset_ms " + formatNumber(max_clock_offset_ms);
+    out += line + "\n";
+  }
   return out;
 }
 

@@ -4,7 +4,9 @@
 // or ERROR for grace_s, and in watch mode it is itself a process with a status and sd_notify).
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <stdexcept>
@@ -27,6 +29,17 @@ void declare(Params& p) {
         Range::atLeast(0));
   p.add("changes_only", false,
         "watch: print the table only when a process appears, goes or changes state (journals)");
+  p.add("max_clock_offset_ms", 5.0, "ms",
+        "another host whose clock is further off than this (estimated from status times) makes "
+        "its processes WARN",
+        Range::above(0));
+}
+
+// The host ptz-health runs on: its processes' clocks are this clock.
+std::string ownHostname() {
+  char host[256] = {};
+  gethostname(host, sizeof(host) - 1);
+  return host;
 }
 
 // What --changes-only compares: each process's verdict and state.
@@ -55,13 +68,12 @@ class HealthNode {
       : lcm_(lcm),
         status_(lcm, p, "ptz-health"),
         expected_(options.expected),
+        hostname_(options.own_hostname),
+        max_clock_offset_ms_(options.max_clock_offset_ms),
         board_(std::move(options)),
         listen_s_(p.getDouble("listen_s")),
         grace_s_(p.getDouble("grace_s")),
         changes_only_(p.getBool("changes_only")) {
-    char host[256] = {};
-    gethostname(host, sizeof(host) - 1);
-    hostname_ = host;
     const std::string pattern = escapeRegex(channel(p, channels::kProcessStatusPrefix)) + ".*";
     statuses_ = std::make_unique<SafeSubscription<ptzstereo::process_status_t>>(
         *lcm_, pattern, status_,
@@ -98,6 +110,7 @@ class HealthNode {
       int not_ok = 0;
       for (const auto& r : reports) not_ok += r.verdict != Verdict::kOk;
       status_.setCounter("processes_not_ok", not_ok);
+      setClockCounters();
       const std::string bad = watchdog.update(reports, now);
       if (!bad.empty()) {
         if (changes_only_) print(reports);
@@ -129,14 +142,32 @@ class HealthNode {
     return board_.judge(wallUtime());
   }
 
+  // The largest clock offset of another host and how many are too far (not one counter per
+  // host: names are the senders' and a counter once set stays in every status).
+  void setClockCounters() {
+    double max_abs_ms = 0;
+    int too_far = 0;
+    for (const auto& c : board_.clocks()) {
+      if (c.own || !std::isfinite(c.offset_ms)) continue;
+      max_abs_ms = std::max(max_abs_ms, std::abs(c.offset_ms));
+      too_far += c.too_far;
+    }
+    status_.setCounter("clock_offset_us_max_abs", std::llround(max_abs_ms * 1e3));
+    status_.setCounter("clock_hosts_too_far", too_far);
+  }
+
   void print(const std::vector<ProcessReport>& reports) {
-    std::string table = formatTable(reports);
+    std::string table = formatTable(reports) + formatClocks(board_.clocks(), max_clock_offset_ms_);
     if (reports.empty()) table += "(no process heard)\n";
     if (board_.undecodable() > 0) {
       table += "(" + std::to_string(board_.undecodable()) + " status messages did not decode)\n";
     }
     if (board_.ignored() > 0) {
       table += "(" + std::to_string(board_.ignored()) + " statuses of further processes ignored)\n";
+    }
+    if (board_.clockIgnored() > 0) {
+      table += "(" + std::to_string(board_.clockIgnored()) +
+               " statuses with a send time over a day off: not used for clocks)\n";
     }
     std::fputs(table.c_str(), stdout);
     std::fflush(stdout);
@@ -150,12 +181,13 @@ class HealthNode {
   lcm::LCM* lcm_;
   StatusReporter status_;
   std::vector<std::string> expected_;
+  std::string hostname_;
+  double max_clock_offset_ms_;
   Board board_;
   double listen_s_;
   double grace_s_;
   bool changes_only_;
   std::string printed_verdicts_;
-  std::string hostname_;
   std::unique_ptr<SafeSubscription<ptzstereo::process_status_t>> statuses_;
 };
 
@@ -174,6 +206,8 @@ int main(int argc, char** argv) {
     if (!p.parse(argc, argv)) return kExitOk;
     options.expected = parseProcessList(p.getString("expect"));
     options.stale_s = p.getDouble("stale_s");
+    options.max_clock_offset_ms = p.getDouble("max_clock_offset_ms");
+    options.own_hostname = ownHostname();
   } catch (const ptz::ConfigError& e) {
     std::fprintf(stderr, "ptz-health: %s\n", e.what());
     return kExitBadFlags;

@@ -12,8 +12,10 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
+#include "common/measure.hpp"
 #include "tools/logs/log_reader.hpp"
 #include "tools/logs/run_metrics.hpp"
 
@@ -24,7 +26,16 @@ struct ChannelStats {
   int64_t bytes = 0;
   int64_t first_utime = 0;
   int64_t last_utime = 0;
+  double max_gap_s = 0;  // the longest time between two of its messages
 };
+
+// A time a channel was silent: from one message to the next, log (receive) times.
+struct Silence {
+  std::string channel;
+  int64_t from_utime, to_utime;
+};
+// A hostile log could ask for millions of lines.
+constexpr size_t kMaxSilencesListed = 1000;
 
 // The heads' true pan, tilt, zoom (left, right) at a frame's capture time.
 struct Heads {
@@ -95,9 +106,22 @@ int summarise(const ptz::Params& p) {
   const std::unique_ptr<FILE, int (*)(FILE*)> csv_closer(
       csv, [](FILE* f) { return f ? std::fclose(f) : 0; });
   std::map<int64_t, Heads> heads;  // by seq: the CSV is written at the end, in frame order
+  const double gaps_over_s = p.getDouble("gaps_over_s");
+  std::vector<Silence> silences;
+  int64_t silences_not_listed = 0;
   while (const lcm::LogEvent* ev = log.next()) {
     ChannelStats& c = channels[ev->channel];
     if (c.messages == 0) c.first_utime = ev->timestamp;
+    const double gap_s =
+        c.messages == 0 ? 0 : (static_cast<double>(ev->timestamp) - c.last_utime) * 1e-6;
+    c.max_gap_s = std::max(c.max_gap_s, gap_s);
+    if (gaps_over_s > 0 && gap_s > gaps_over_s) {
+      if (silences.size() < kMaxSilencesListed) {
+        silences.push_back({ev->channel, c.last_utime, ev->timestamp});
+      } else {
+        ++silences_not_listed;
+      }
+    }
     c.last_utime = ev->timestamp;
     ++c.messages;
     c.bytes += ev->datalen;
@@ -145,12 +169,32 @@ int summarise(const ptz::Params& p) {
                  log.describeBreaks().c_str());
   }
   std::printf("log %s\n", path.c_str());
-  std::printf("%-32s %10s %10s %12s\n", "channel", "messages", "rate Hz", "MB");
+  std::printf("%-32s %10s %10s %12s %10s\n", "channel", "messages", "rate Hz", "MB", "max gap s");
   for (const auto& [name, c] : channels) {
     const double span_s = (c.last_utime - c.first_utime) * 1e-6;
     const double rate = span_s > 0 ? (c.messages - 1) / span_s : 0.0;
-    std::printf("%-32s %10lld %10.1f %12.2f\n", name.c_str(), static_cast<long long>(c.messages),
-                rate, c.bytes / 1e6);
+    std::printf("%-32s %10lld %10.1f %12.2f %10.3f\n", ptz::printable(name, 100).c_str(),
+                static_cast<long long>(c.messages), rate, c.bytes / 1e6, c.max_gap_s);
+  }
+  for (const auto& g : silences) {
+    std::printf("silence %s from %lld to %lld (%.3f s)\n", ptz::printable(g.channel, 100).c_str(),
+                static_cast<long long>(g.from_utime), static_cast<long long>(g.to_utime),
+                (static_cast<double>(g.to_utime) - g.from_utime) * 1e-6);
+  }
+  // A channel that fell silent for good: up to the log's last event.
+  int64_t log_end_utime = 0;
+  for (const auto& [name, c] : channels) log_end_utime = std::max(log_end_utime, c.last_utime);
+  for (const auto& [name, c] : channels) {
+    const double silent_s = (static_cast<double>(log_end_utime) - c.last_utime) * 1e-6;
+    if (gaps_over_s > 0 && silent_s > gaps_over_s) {
+      std::printf("silence %s from %lld to the end of the log (%.3f s)\n",
+                  ptz::printable(name, 100).c_str(), static_cast<long long>(c.last_utime),
+                  silent_s);
+    }
+  }
+  if (silences_not_listed) {
+    std::printf("silences not listed (over %zu): %lld\n", kMaxSilencesListed,
+                static_cast<long long>(silences_not_listed));
   }
   std::printf("stereo frames missing from the log by sequence number: %lld\n",
               static_cast<long long>(frame_gaps));
@@ -160,10 +204,18 @@ int summarise(const ptz::Params& p) {
                 log.truncated() ? "the log is cut off at its end" : "the log's end is whole");
   }
   for (const auto& [process, s] : last_status) {
-    std::printf("%s (last status, uptime %.1f s)%s%s\n", process.c_str(), s.uptime_s,
-                s.message.empty() ? "" : ": ", s.message.c_str());
+    std::printf("%s (last status, uptime %.1f s)%s%s\n", ptz::printable(process, 100).c_str(),
+                s.uptime_s, s.message.empty() ? "" : ": ", ptz::printable(s.message).c_str());
+    // What it sent and received: set against another host's log, what crossed the network.
+    for (const auto& c : s.channels) {
+      std::printf("  %-3s %-32s %lld messages, %lld dropped\n",
+                  c.direction == ptzstereo::channel_status_t::DIRECTION_OUT ? "out" : "in",
+                  ptz::printable(c.channel, 100).c_str(), static_cast<long long>(c.messages),
+                  static_cast<long long>(c.dropped));
+    }
     for (const auto& counter : s.counters) {
-      std::printf("  %-36s %lld\n", counter.name.c_str(), static_cast<long long>(counter.value));
+      std::printf("  %-36s %lld\n", ptz::printable(counter.name, 100).c_str(),
+                  static_cast<long long>(counter.value));
     }
   }
   const ptz::tools::RunSummary summary = metrics.summary();
@@ -203,6 +255,10 @@ int main(int argc, char** argv) {
   p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame",
         ptz::Range::atLeast(0));
   p.add("csv", "", "also write the heads' true pan/tilt/zoom per frame (SIM_TRUTH) to this CSV");
+  p.add("gaps_over_s", 0.0, "s",
+        "also list every silence of a channel longer than this, from and to in log time (us); "
+        "0: none",
+        ptz::Range::atLeast(0));
   try {
     if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;
     return summarise(p);

@@ -329,7 +329,10 @@ RunSummary RunMetrics::summary() const {
   };
   // The simulator's count, else every frame seen by any of its messages.
   const int64_t seen = std::max(frames_seen_, static_cast<int64_t>(frame_utime_.size()));
-  s.frames_published = std::max(seen, counter("ptz-sim.frames_published", seen));
+  s.frames_not_published = counter("ptz-sim.STEREO_FRAME.publish_failures", 0);
+  // A refused frame's SIM_TRUTH may still have gone out: seen, but not published.
+  s.frames_published =
+      std::max(seen - s.frames_not_published, counter("ptz-sim.frames_published", seen));
   s.frames_processed = poses_;
   std::vector<double> chain_ms;
   for (const auto& [seq, publish_utime] : setpoint_publish_) {
@@ -372,7 +375,8 @@ RunSummary RunMetrics::summary() const {
   if (!sc.reacquire_s.empty()) {
     s.reacquire_max_s = *std::max_element(sc.reacquire_s.begin(), sc.reacquire_s.end());
   }
-  const int64_t frames = s.frames_published;
+  // Frames the simulator made but could not send were lost to the loop as much as any other.
+  const int64_t frames = s.frames_published + s.frames_not_published;
   int64_t with_target = 0;
   for (const auto& [seq, p] : pose_) {
     if (!p.target) continue;
@@ -402,6 +406,7 @@ std::string RunSummary::toJson() const {
   std::ostringstream j;
   j << "{\n"
     << "  \"frames_published\": " << frames_published << ",\n"
+    << "  \"frames_not_published\": " << frames_not_published << ",\n"
     << "  \"frames_processed\": " << frames_processed << ",\n"
     << "  \"latency_ms_p50\": " << number(latency_ms_p50) << ",\n"
     << "  \"latency_ms_p99\": " << number(latency_ms_p99) << ",\n"

@@ -20,6 +20,8 @@ namespace ptz::tools {
 
 struct RunSummary {
   int64_t frames_published = 0;  // the simulator's count, else frames seen (by any message)
+  // Made by the simulator but refused by LCM (no route: a link down), its publish_failures.
+  int64_t frames_not_published = 0;
   int64_t frames_processed = 0;  // OBJECT_POSE messages
   double latency_ms_p50 = NAN;   // frame capture -> setpoint publish (wall-clock runs only)
   double latency_ms_p99 = NAN;

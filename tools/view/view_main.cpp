@@ -5,6 +5,7 @@
 // click on either image asks ptz-detect to follow the object under it (TARGET_SELECT).
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <cstdlib>
@@ -32,7 +33,8 @@ class ViewNode {
         max_wait_us_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)),
         screenshot_dir_(p.getString("screenshot_dir")),
         screenshot_after_(p.getInt("screenshot_after_frames")),
-        ch_frame_(channel(p, channels::kStereoFrame)),
+        preview_(p.getBool("preview")),
+        ch_frame_(channel(p, preview_ ? channels::kStereoPreview : channels::kStereoFrame)),
         ch_select_(channel(p, channels::kTargetSelect)) {
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
@@ -171,7 +173,8 @@ class ViewNode {
     ViewInput in;
     std::string error;
     // The rig's size bounds what decoding may cost (a small JPEG can claim any size).
-    if (!checkFrameMatchesRig(m, rig_.left.width, rig_.left.height, &error)) {
+    if (!(preview_ ? checkPreviewMatchesRig(m, rig_.left.width, rig_.left.height, &error)
+                   : checkFrameMatchesRig(m, rig_.left.width, rig_.left.height, &error))) {
       status_.countDropped(ch_frame_, "size_mismatch");
       log_.warn("size", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
       pending_.reset();
@@ -183,6 +186,11 @@ class ViewNode {
       log_.warn("image", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
       pending_.reset();
       return;
+    }
+    if (preview_) {  // drawn at the rig's size: the detections are in its pixels
+      const cv::Size rig_size(rig_.left.width, rig_.left.height);
+      cv::resize(in.left, in.left, rig_size, 0, 0, cv::INTER_LINEAR);
+      cv::resize(in.right, in.right, rig_size, 0, 0, cv::INTER_LINEAR);
     }
     in.left_ptz = {m.left.pan_rad, m.left.tilt_rad, m.left.zoom};
     in.right_ptz = {m.right.pan_rad, m.right.tilt_rad, m.right.zoom};
@@ -234,6 +242,7 @@ class ViewNode {
   int64_t max_wait_us_;
   std::string screenshot_dir_;
   int64_t screenshot_after_;
+  bool preview_;
   std::string ch_frame_, ch_select_;
   std::optional<Pending> pending_;
   std::map<int64_t, ptzstereo::object_detections_t> detections_by_seq_;
@@ -273,6 +282,9 @@ int main(int argc, char** argv) {
   params.add("max_wait_s", 0.2, "s",
              "draw a frame without its detections, pose or tracks after this long",
              Range::atLeast(0));
+  params.add("preview", false,
+             "draw STEREO_PREVIEW (the small copies a camera host sends over a LAN, scaled up) "
+             "instead of STEREO_FRAME");
   params.add("screenshot_dir", ".", "where the s key (and screenshot_after_frames) saves PNGs");
   params.add("screenshot_after_frames", 0, "", "save one screenshot after this many frames",
              Range::atLeast(0));

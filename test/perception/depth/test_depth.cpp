@@ -247,3 +247,37 @@ TEST(Cloud, PcdWrittenOrAClearError) {
   EXPECT_FALSE(perception::writePcd(c, "/nonexistent-dir/cloud.pcd", &error));
   EXPECT_NE(error.find("/nonexistent-dir/cloud.pcd"), std::string::npos) << error;
 }
+
+// The preview that crosses a LAN: every k-th point, within its byte bound, the points unchanged.
+TEST(Cloud, APreviewKeepsEveryKthPointWithinItsBytes) {
+  std::vector<cv::Point3f> points;
+  std::vector<cv::Vec3b> colours;
+  for (int i = 0; i < 1000; ++i) {
+    points.emplace_back(0.01f * i, 0.0f, 2.0f);
+    colours.emplace_back(1, 2, 3);
+  }
+  perception::CloudParams none;
+  none.voxel_size_m = 0;  // all 1000 points, in order
+  const ptzstereo::point_cloud_t c = perception::makeCloud(points, colours, none);
+  ASSERT_EQ(c.width, 1000);
+  // 32 bytes a point: 3200 bytes hold 100, so every 10th.
+  const ptzstereo::point_cloud_t p = perception::decimateCloud(c, 3200);
+  EXPECT_EQ(p.width, 100);
+  EXPECT_EQ(p.height, 1);
+  EXPECT_EQ(p.data_size, 3200);
+  EXPECT_EQ(p.row_step, 3200);
+  std::vector<cv::Point3f> back;
+  ASSERT_TRUE(perception::cloudPoints(p, &back));
+  ASSERT_EQ(back.size(), 100u);
+  EXPECT_FLOAT_EQ(back[1].x, 0.10f);
+  EXPECT_FLOAT_EQ(back[99].x, 9.90f);
+  // A bound that does not divide: 3199 bytes hold 99, so every 11th (91 points).
+  EXPECT_EQ(perception::decimateCloud(c, 3199).width, 91);
+  // Under its bound already: all of it.
+  EXPECT_EQ(perception::decimateCloud(c, 1'000'000).width, 1000);
+  // A layout whose sizes disagree gives nothing, never a read past the data.
+  ptzstereo::point_cloud_t bad = c;
+  bad.width = 2000;
+  EXPECT_EQ(perception::decimateCloud(bad, 3200).width, 0);
+  EXPECT_TRUE(perception::decimateCloud(bad, 3200).data.empty());
+}

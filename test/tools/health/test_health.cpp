@@ -1,8 +1,12 @@
 // ptz-health's judgement on hand-made statuses: verdicts, stale and missing processes, restarts,
-// the lines it prints, the watchdog's grace and hostile names.
+// the lines it prints, the watchdog's grace, hostile names and other hosts' clock offsets.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
 #include <stdexcept>
 
 #include "tools/health/health.hpp"
@@ -46,6 +50,30 @@ const ProcessReport& find(const std::vector<ProcessReport>& reports, const std::
     if (r.process == name) return r;
   }
   throw std::runtime_error("no report for " + name);
+}
+
+Options clockOptions(double max_clock_offset_ms = 5.0, const std::string& own = "listener") {
+  Options o;
+  o.max_clock_offset_ms = max_clock_offset_ms;
+  o.own_hostname = own;
+  return o;
+}
+
+// A status of `process` on `host` sent at listener time send_utime by a clock offset_us ahead,
+// received latency_us later.
+void sendTimed(Board* board, const std::string& process, const std::string& host,
+               int64_t send_utime, int64_t offset_us, int64_t latency_us) {
+  Status s = status(process);
+  s.hostname = host;
+  s.utime = send_utime + offset_us;
+  board->onStatus(s, send_utime + latency_us);
+}
+
+HostClock clockOf(const Board& board, const std::string& host) {
+  for (const auto& c : board.clocks()) {
+    if (c.hostname == host) return c;
+  }
+  throw std::runtime_error("no clock for " + host);
 }
 
 }  // namespace
@@ -226,4 +254,190 @@ TEST(Health, ProcessListsAreChecked) {
   EXPECT_THROW(parseProcessList("ptz-sim,,ptz-detect"), std::invalid_argument);
   EXPECT_THROW(parseProcessList("ptz sim"), std::invalid_argument);
   EXPECT_THROW(parseProcessList("ptz-sim;rm"), std::invalid_argument);
+}
+
+TEST(HealthClock, KnownOffsetsAreEstimatedWithinASmallLatency) {
+  Board board(clockOptions(50.0));
+  std::mt19937 rng(7);
+  // LAN jitter 0.2 .. 2 ms: mostly near the floor, now and then queued.
+  std::exponential_distribution<double> queued_ms(1 / 0.3);
+  const auto latency_ms = [&](std::mt19937& r) { return std::min(2.0, 0.2 + queued_ms(r)); };
+  const std::map<std::string, double> offsets_ms = {{"host-a", 12.0}, {"host-b", -3.0}};
+  std::map<std::string, std::vector<double>> window_latencies_ms;
+  for (int i = 0; i < 40; ++i) {
+    for (const auto& [host, offset_ms] : offsets_ms) {
+      const double lat_ms = latency_ms(rng);
+      if (i >= 10) window_latencies_ms[host].push_back(lat_ms);
+      sendTimed(&board, "ptz-detect", host, kT0 + i * kSecond, std::llround(offset_ms * 1e3),
+                std::llround(lat_ms * 1e3));
+    }
+  }
+  for (const auto& [host, offset_ms] : offsets_ms) {
+    const HostClock c = clockOf(board, host);
+    EXPECT_EQ(c.statuses, kClockWindowStatuses) << host;
+    EXPECT_NEAR(c.offset_ms, offset_ms, 0.3) << host;
+    // Exactly the offset minus the second smallest latency in the window (µs rounding aside).
+    auto lat = window_latencies_ms[host];
+    std::sort(lat.begin(), lat.end());
+    EXPECT_NEAR(c.offset_ms, offset_ms - lat[1], 0.002) << host;
+    EXPECT_LE(c.offset_ms, offset_ms) << host;
+    EXPECT_FALSE(c.own);
+    EXPECT_FALSE(c.too_far);
+  }
+  const auto reports = board.judge(kT0 + 40 * kSecond);
+  ASSERT_EQ(reports.size(), 2u);
+  for (const auto& r : reports) {
+    EXPECT_NEAR(r.clock_offset_ms, offsets_ms.at(r.hostname), 0.3) << r.hostname;
+    EXPECT_EQ(r.verdict, Verdict::kOk) << r.hostname;  // 50 ms allowed
+  }
+}
+
+TEST(HealthClock, TheWindowFollowsAClockStep) {
+  Board board(clockOptions());
+  for (int i = 0; i < 30; ++i) sendTimed(&board, "ptz-sim", "host-a", kT0 + i * kSecond, 1000, 500);
+  EXPECT_NEAR(clockOf(board, "host-a").offset_ms, 0.5, 1e-9);
+  // Stepped back 20 ms: the old, smaller delays bound the estimate until they leave the window.
+  int64_t t = kT0 + 30 * kSecond;
+  sendTimed(&board, "ptz-sim", "host-a", t, -20'000, 500);
+  EXPECT_NEAR(clockOf(board, "host-a").offset_ms, 0.5, 1e-9);
+  for (size_t i = 1; i < kClockWindowStatuses; ++i) {
+    sendTimed(&board, "ptz-sim", "host-a", t += kSecond, -20'000, 500);
+  }
+  EXPECT_NEAR(clockOf(board, "host-a").offset_ms, -20.5, 1e-9);
+  EXPECT_EQ(find(board.judge(t), "ptz-sim").verdict, Verdict::kWarn);
+
+  // Statuses older than the window's seconds leave it too, however few there were.
+  Board sparse(clockOptions());
+  sendTimed(&sparse, "ptz-sim", "host-a", kT0, 0, 500);
+  sendTimed(&sparse, "ptz-sim", "host-a", kT0 + kSecond, 0, 500);
+  const int64_t later = kT0 + kSecond + static_cast<int64_t>(kClockWindowS * 1e6) + kSecond;
+  sendTimed(&sparse, "ptz-sim", "host-a", later, 9000, 500);
+  EXPECT_NEAR(clockOf(sparse, "host-a").offset_ms, 8.5, 1e-9);
+  EXPECT_EQ(clockOf(sparse, "host-a").statuses, 1u);
+  EXPECT_EQ(formatClocks(sparse.clocks(), 5.0), "clock  host-a       +8.5 ms (1 status)\n");
+}
+
+TEST(HealthClock, AHostPastTheThresholdMakesItsProcessesWarnByName) {
+  Board board(clockOptions(5.0));
+  for (int i = 0; i < 5; ++i) {
+    const int64_t t = kT0 + i * kSecond;
+    sendTimed(&board, "ptz-detect", "host-a", t, 12'400, 100);  // 12.3 ms ahead
+    sendTimed(&board, "ptz-control", "host-b", t, -3'000, 100);
+    sendTimed(&board, "ptz-depth", "host-c", t, -8'000, 100);
+  }
+  Status err = status("ptz-camera", Status::STATE_ERROR, "no frames");
+  err.hostname = "host-a";
+  err.utime = kT0 + 5 * kSecond + 12'400;
+  board.onStatus(err, kT0 + 5 * kSecond + 100);
+  const auto reports = board.judge(kT0 + 5 * kSecond);
+  const ProcessReport& a = find(reports, "ptz-detect");
+  EXPECT_EQ(a.verdict, Verdict::kWarn);
+  EXPECT_NEAR(a.clock_offset_ms, 12.3, 1e-9);
+  EXPECT_EQ(find(reports, "ptz-control").verdict, Verdict::kOk);  // 3.1 ms is within 5
+  EXPECT_TRUE(find(reports, "ptz-control").clock_message.empty());
+  EXPECT_EQ(find(reports, "ptz-depth").verdict, Verdict::kWarn);
+  EXPECT_EQ(find(reports, "ptz-camera").verdict, Verdict::kError);  // at least WARN, not less
+  EXPECT_EQ(exitCode(reports), kExitNotOk);
+  const std::string line = formatLine(a);
+  EXPECT_NE(line.find("host-a"), std::string::npos) << line;
+  EXPECT_NE(line.find("clock 12.3 ms ahead of this host (max_clock_offset_ms 5): sync clocks "
+                      "(chrony/PTP)"),
+            std::string::npos)
+      << line;
+  const std::string behind = formatLine(find(reports, "ptz-depth"));
+  EXPECT_NE(behind.find("clock 8.1 ms behind this host"), std::string::npos) << behind;
+  const std::string clocks = formatClocks(board.clocks(), 5.0);
+  EXPECT_NE(clocks.find("clock  host-a       +12.3 ms (6 statuses) over max_clock_offset_ms 5\n"),
+            std::string::npos)
+      << clocks;
+  EXPECT_NE(clocks.find("clock  host-b       -3.1 ms (5 statuses)\n"), std::string::npos) << clocks;
+  EXPECT_EQ(std::count(clocks.begin(), clocks.end(), '\n'), 3);
+
+  // The threshold decides: 20 ms allows every host.
+  Board lenient(clockOptions(20.0));
+  for (int i = 0; i < 5; ++i) {
+    sendTimed(&lenient, "ptz-detect", "host-a", kT0 + i * kSecond, 12'400, 100);
+  }
+  EXPECT_EQ(lenient.judge(kT0 + 5 * kSecond)[0].verdict, Verdict::kOk);
+}
+
+TEST(HealthClock, TheListenersOwnHostIsNeverJudgedOnClock) {
+  Board board(clockOptions(5.0, "rig"));
+  for (int i = 0; i < 5; ++i) sendTimed(&board, "ptz-sim", "rig", kT0 + i * kSecond, 50'000, 100);
+  const auto reports = board.judge(kT0 + 5 * kSecond);
+  EXPECT_EQ(reports[0].verdict, Verdict::kOk);
+  EXPECT_NEAR(reports[0].clock_offset_ms, 49.9, 1e-9);  // estimated, not judged
+  EXPECT_TRUE(clockOf(board, "rig").own);
+  EXPECT_FALSE(clockOf(board, "rig").too_far);
+  EXPECT_EQ(formatClocks(board.clocks(), 5.0), "");  // a single host has a single clock
+  sendTimed(&board, "ptz-detect", "host-a", kT0 + 5 * kSecond, 0, 100);
+  EXPECT_NE(formatClocks(board.clocks(), 5.0)
+                .find("clock  rig          +49.9 ms (5 statuses) "
+                      "this host\n"),
+            std::string::npos);
+
+  // The same statuses from another host's point of view do warn.
+  Board elsewhere(clockOptions(5.0, "other"));
+  for (int i = 0; i < 5; ++i) {
+    sendTimed(&elsewhere, "ptz-sim", "rig", kT0 + i * kSecond, 50'000, 100);
+  }
+  EXPECT_EQ(elsewhere.judge(kT0 + 5 * kSecond)[0].verdict, Verdict::kWarn);
+}
+
+TEST(HealthClock, HostileSendTimesAreIgnoredWithoutHarmToOthers) {
+  Board board(clockOptions(5.0));
+  for (int i = 0; i < 3; ++i) sendTimed(&board, "ptz-sim", "good", kT0 + i * kSecond, 1000, 200);
+  const int64_t t = kT0 + 3 * kSecond;
+  int64_t n = 0;
+  for (int64_t utime : {std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max(),
+                        int64_t{0}, t + 2 * 86'400 * kSecond}) {
+    Status evil = status("ptz-evil");
+    evil.hostname = "evil";
+    evil.utime = utime;
+    board.onStatus(evil, t);
+    Status liar = status("ptz-liar");  // on the good host: must not move its estimate
+    liar.hostname = "good";
+    liar.utime = utime;
+    board.onStatus(liar, t);
+    n += 2;
+  }
+  Status extreme = status("ptz-evil");
+  extreme.hostname = "evil";
+  extreme.utime = std::numeric_limits<int64_t>::min();
+  board.onStatus(extreme, std::numeric_limits<int64_t>::max());  // the widest gap there is
+  ++n;
+  EXPECT_EQ(board.clockIgnored(), n);
+  EXPECT_NEAR(clockOf(board, "good").offset_ms, 0.8, 1e-9);
+  EXPECT_EQ(clockOf(board, "good").statuses, 3u);
+  EXPECT_THROW(clockOf(board, "evil"), std::runtime_error);  // no usable time, no clock
+  const auto reports = board.judge(t);
+  EXPECT_EQ(find(reports, "ptz-sim").verdict, Verdict::kOk);
+  EXPECT_EQ(find(reports, "ptz-liar").verdict, Verdict::kOk);
+  EXPECT_TRUE(std::isnan(find(reports, "ptz-evil").clock_offset_ms));
+  EXPECT_TRUE(find(reports, "ptz-evil").clock_message.empty());
+  // A day is the limit: just under it is a (badly) wrong clock, judged as such.
+  Status far = status("ptz-far");
+  far.hostname = "far";
+  far.utime = t - 86'000 * kSecond;
+  board.onStatus(far, t);
+  EXPECT_EQ(find(board.judge(t), "ptz-far").verdict, Verdict::kOk);  // one status is no verdict
+  far.utime += kSecond;
+  board.onStatus(far, t + kSecond);
+  EXPECT_EQ(board.clockIgnored(), n);
+  EXPECT_EQ(find(board.judge(t + kSecond), "ptz-far").verdict, Verdict::kWarn);
+}
+
+// One status stamped far ahead (a stepped clock, a forged status) cannot make a host's processes
+// WARN on its own: the estimate rests on the second smallest delay.
+TEST(HealthClock, OneStatusStampedAheadDoesNotMoveTheHostsClock) {
+  Board board(clockOptions());
+  for (int i = 0; i < 10; ++i) sendTimed(&board, "ptz-sim", "host-a", kT0 + i * kSecond, 0, 500);
+  sendTimed(&board, "ptz-detect", "host-a", kT0 + 10 * kSecond, 100'000, 500);
+  EXPECT_NEAR(clockOf(board, "host-a").offset_ms, -0.5, 1e-9);
+  for (const auto& r : board.judge(kT0 + 10 * kSecond)) {
+    EXPECT_EQ(r.verdict, Verdict::kOk) << r.process << ": " << r.clock_message;
+  }
+  // A second one is a clock that really is ahead.
+  sendTimed(&board, "ptz-detect", "host-a", kT0 + 11 * kSecond, 100'000, 500);
+  EXPECT_NEAR(clockOf(board, "host-a").offset_ms, 99.5, 1e-9);
 }

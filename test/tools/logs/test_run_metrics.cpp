@@ -10,6 +10,7 @@
 #include <functional>
 #include <iterator>
 #include <random>
+#include <sstream>
 
 #include "support/run_program.hpp"
 #include "tools/logs/run_metrics.hpp"
@@ -330,4 +331,68 @@ TEST(RunMetrics, ABoxsOrientationErrorIsTheAngleModuloItsQuarterTurns) {
   ball.onPose(p);
   EXPECT_EQ(ball.summary().orientation_samples, 0);
   EXPECT_NE(ball.summary().toJson().find("\"orientation_error_rms_deg\": null"), std::string::npos);
+}
+
+TEST(RunMetrics, FramesTheSimulatorCouldNotSendCountAsLost) {
+  RunMetrics m("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 20; ++seq) {
+    m.onTruth(syn::truth(seq, {kBall}));
+    m.onPose(syn::pose(seq, "red_ball", kBall.position_m));
+  }
+  // 20 sent and answered; 10 more made while its link was down, refused by LCM.
+  ptzstereo::process_status_t status{};
+  status.process = "ptz-sim";
+  status.counters = {{"frames_published", 20}, {"STEREO_FRAME.publish_failures", 10}};
+  status.num_counters = 2;
+  m.onStatus(status);
+  const auto s = m.summary();
+  EXPECT_EQ(s.frames_published, 20);
+  EXPECT_EQ(s.frames_not_published, 10);
+  EXPECT_EQ(s.frames_without_pose, 10);
+  EXPECT_NEAR(s.target_lost_s, 1.0, 1e-9);
+  EXPECT_NE(s.toJson().find("\"frames_not_published\": 10,"), std::string::npos) << s.toJson();
+}
+
+// Where a channel fell silent and for how long (a link down between hosts), and what each process
+// said it sent and received.
+TEST(LogSummary, SilencesAndEachProcesssChannelsAreListed) {
+  const std::string log = tempPath("silent.lcmlog");
+  {
+    syn::LogWriter w(log);
+    for (int64_t seq = 0; seq < 30; ++seq) {
+      w.put("SIM_TRUTH", syn::truth(seq, {kBall}));
+      if (seq < 10 || seq >= 25) w.put("OBJECT_TRACKS", syn::tracks(seq, 1, 1));
+    }
+    ptzstereo::process_status_t status{};
+    status.utime = syn::utimeOf(29);
+    status.process = "ptz-detect";
+    status.channels.push_back(
+        {"OBJECT_TRACKS", ptzstereo::channel_status_t::DIRECTION_OUT, 30.0, 28, 0, 1.0, 2.0});
+    status.channels.push_back(
+        {"STEREO_FRAME", ptzstereo::channel_status_t::DIRECTION_IN, 30.0, 30, 3, 1.0, 2.0});
+    status.num_channels = 2;
+    w.put("PROCESS_STATUS_PTZ_DETECT", status);
+  }
+  const auto r = ptz::test::runProgram({PTZ_LOG_SUMMARY_BIN, "--log", log, "--gaps-over-s", "0.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string silence = "silence OBJECT_TRACKS from " + std::to_string(syn::utimeOf(9)) +
+                              " to " + std::to_string(syn::utimeOf(25)) + " (1.600 s)\n";
+  EXPECT_NE(r.out.find(silence), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("silence SIM_TRUTH"), std::string::npos) << r.out;  // never 0.5 s silent
+  EXPECT_NE(r.out.find("  out OBJECT_TRACKS                    28 messages, 0 dropped\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("  in  STEREO_FRAME                     30 messages, 3 dropped\n"),
+            std::string::npos)
+      << r.out;
+  // The longest gap of each channel is in its row.
+  std::istringstream rows(r.out);
+  for (std::string line; std::getline(rows, line);) {
+    if (line.rfind("OBJECT_TRACKS ", 0) == 0) {
+      EXPECT_NE(line.find(" 1.600"), std::string::npos) << line;
+    }
+    if (line.rfind("SIM_TRUTH ", 0) == 0) {
+      EXPECT_NE(line.find(" 0.100"), std::string::npos) << line;
+    }
+  }
 }
