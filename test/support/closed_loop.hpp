@@ -23,12 +23,14 @@ struct Listener {
   ptz::tools::RunMetrics metrics;
   std::map<std::string, std::map<std::string, int64_t>> counters;  // process -> counter
   std::map<std::string, std::string> warnings;  // process -> its last WARN message
-  std::vector<ptzstereo::sim_truth_t> truths;
+  // By frame seq: a listener can lose a datagram too (raw VGA frames flood its socket in
+  // lockstep), and each truth is scored at its own frame's time.
+  std::map<int64_t, ptzstereo::sim_truth_t> truths;
   int64_t first_target_seq = -1;  // the first frame whose pose has a target (the acquisition)
 
   void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
     metrics.onTruth(*m);
-    truths.push_back(*m);
+    truths.emplace(m->frame_seq, *m);
   }
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
     metrics.onPose(*m);

@@ -45,8 +45,9 @@ TEST(ClosedLoop, PaperModeStepResponseFollowsTheSampledPaperLoopAt30Hz) {
   const double tau = 0.1, fps = 30;
   auto run = runLoop({"--config", kConfig + "sim_paper.yaml", "--frames", "120"},
                      {"--config", kConfig + "control_paper.yaml"});
-  ASSERT_EQ(run->truths.size(), 120u);
-  const ptzstereo::sim_truth_t& first = run->truths.front();
+  ASSERT_GE(run->truths.size(), 118u);  // 98 %: the listener may lose one
+  ASSERT_EQ(run->truths.rbegin()->first, 119);
+  const ptzstereo::sim_truth_t& first = run->truths.begin()->second;
   const Eigen::Vector3d ball(first.objects[0].position_m[0], first.objects[0].position_m[1],
                              first.objects[0].position_m[2]);
   const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
@@ -67,21 +68,24 @@ TEST(ClosedLoop, PaperModeStepResponseFollowsTheSampledPaperLoopAt30Hz) {
   ASSERT_GE(run->first_target_seq, 0);
   const size_t acquired = static_cast<size_t>(run->first_target_seq);
   double worst = 0;
-  for (size_t k = 0; k < run->truths.size(); ++k) {
+  for (size_t k = 0; k < 120; ++k) {
     const double t = k / fps;
     reference.advanceTo(t, 0.0005);
-    const double measured = run->truths[k].left_head.pan_rad;
-    worst = std::max(worst, std::abs(measured - reference.position()));
+    const auto truth = run->truths.find(static_cast<int64_t>(k));
+    if (truth != run->truths.end()) {
+      worst = std::max(worst, std::abs(truth->second.left_head.pan_rad - reference.position()));
+    }
     if (k >= acquired) reference.command(t, 1.7 * (target - reference.position()));
   }
   const double final_value = 1.7 / 2.7 * target;  // the paper's steady-state error
   std::printf(
       "paper mode: theta* = %.4f rad, final %.4f rad (expected %.4f), worst deviation "
       "from the model %.5f rad = %.2f %% of the final value\n",
-      target, run->truths.back().left_head.pan_rad, final_value, worst, 100 * worst / final_value);
+      target, run->truths.rbegin()->second.left_head.pan_rad, final_value, worst,
+      100 * worst / final_value);
   EXPECT_GT(target, 0.1);
   EXPECT_LE(worst, 0.02 * final_value);
-  EXPECT_NEAR(run->truths.back().left_head.pan_rad, final_value, 0.02 * final_value);
+  EXPECT_NEAR(run->truths.rbegin()->second.left_head.pan_rad, final_value, 0.02 * final_value);
 }
 
 TEST(ClosedLoop, PaperModeStepResponseIsThePapersContinuousClosedLoop) {
@@ -92,8 +96,10 @@ TEST(ClosedLoop, PaperModeStepResponseIsThePapersContinuousClosedLoop) {
   auto run = runLoop({"--config", kConfig + "sim_paper.yaml", "--frame-rate-hz", "300", "--frames",
                       std::to_string(static_cast<int>(duration_s * fps))},
                      {"--config", kConfig + "control_paper.yaml"});
-  ASSERT_EQ(run->truths.size(), static_cast<size_t>(duration_s * fps));
-  const auto& o = run->truths.front().objects[0];
+  const auto frames = static_cast<int64_t>(duration_s * fps);
+  ASSERT_GE(static_cast<int64_t>(run->truths.size()), frames * 98 / 100);  // may lose a few
+  ASSERT_EQ(run->truths.rbegin()->first, frames - 1);
+  const auto& o = run->truths.begin()->second.objects[0];
   const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
   double target = 0, tilt = 0;
   ASSERT_TRUE(ptz::control::aimAt(rig, ptz::Side::kLeft,
@@ -107,11 +113,12 @@ TEST(ClosedLoop, PaperModeStepResponseIsThePapersContinuousClosedLoop) {
   ASSERT_GE(run->first_target_seq, 0);
   const size_t acquired = static_cast<size_t>(run->first_target_seq);
   double worst = 0;
-  for (size_t k = 0; k < run->truths.size(); ++k) {
+  for (const auto& [seq, truth] : run->truths) {
+    const size_t k = static_cast<size_t>(seq);
     const double since_s = k < acquired ? 0.0 : (k - acquired) / fps;
     const size_t i = std::min(unit.size() - 1, static_cast<size_t>(std::lround(since_s / step_s)));
     const double model = k < acquired ? 0.0 : target * unit[i];
-    worst = std::max(worst, std::abs(run->truths[k].left_head.pan_rad - model));
+    worst = std::max(worst, std::abs(truth.left_head.pan_rad - model));
   }
   std::printf(
       "paper mode at 300 Hz: worst deviation from the continuous model %.5f rad = %.2f "
