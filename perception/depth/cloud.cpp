@@ -121,16 +121,8 @@ bool toPcl(const ptzstereo::point_cloud_t& m, pcl::PCLPointCloud2* c) {
 }  // namespace
 
 ptzstereo::point_cloud_t decimateCloud(const ptzstereo::point_cloud_t& cloud, int64_t max_bytes) {
-  ptzstereo::point_cloud_t out;  // the header alone: the data is picked below
-  out.utime = cloud.utime;
-  out.publish_utime = cloud.publish_utime;
-  out.frame_seq = cloud.frame_seq;
-  out.frame_id = cloud.frame_id;
-  out.is_dense = cloud.is_dense;
-  out.is_bigendian = cloud.is_bigendian;
-  out.num_fields = cloud.num_fields;
-  out.fields = cloud.fields;
-  out.point_step = cloud.point_step;
+  ptzstereo::point_cloud_t out = cloud;  // a copy at the preview's rate (1 Hz), then the points
+  out.data.clear();
   out.width = 0;
   out.height = 1;
   const int64_t step = cloud.point_step;

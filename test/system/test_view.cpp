@@ -107,6 +107,28 @@ void startX(std::unique_ptr<ChildProcess>* xvfb) {
   setenv("DISPLAY", d.c_str(), 1);
 }
 
+// ptz-detect and ptz-view (view_args after its URL) on the simulator's frames, both up, and a
+// fresh folder for the screenshots.
+struct DetectAndView {
+  std::string shots;
+  std::unique_ptr<ChildProcess> detect, view;
+};
+void startDetectAndView(lcm::LCM& lcm, Listener& l, const std::string& shots_name,
+                        std::vector<std::string> view_args, DetectAndView* out) {
+  out->shots = std::string(::testing::TempDir()) + "/" + shots_name;
+  shell("rm -rf '" + out->shots + "'");
+  ::mkdir(out->shots.c_str(), 0755);
+  out->detect = std::make_unique<ChildProcess>(
+      std::vector<std::string>{PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                               PTZ_SOURCE_DIR "/config/detect_default.yaml"});
+  std::vector<std::string> view = {PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl,
+                                   "--screenshot-dir", out->shots};
+  view.insert(view.end(), view_args.begin(), view_args.end());
+  out->view = std::make_unique<ChildProcess>(view);
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-view"]["up"]; }, 30s));
+}
+
 // Where the window shows `canvas` on the X screen (the exact match of it), or fails.
 void findOnScreen(const cv::Mat& canvas, const std::string& root_png, cv::Point* at) {
   ASSERT_EQ(shell("import -window root " + root_png), 0);
@@ -315,15 +337,12 @@ TEST(View, TheScreenShowsBothImagesWithTheOverlay) {
   lcm::LCM lcm(ptz::test::kTestUrl);
   Listener l;
   l.listen(lcm);
-  const std::string shots = std::string(::testing::TempDir()) + "/view_shots";
-  ::mkdir(shots.c_str(), 0755);
-  ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
-                       PTZ_SOURCE_DIR "/config/detect_default.yaml"});
   // A frame waits for its detections (however slow ptz-detect is here) before it is drawn.
-  ChildProcess view({PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl, "--screenshot-dir", shots,
-                     "--max-wait-s", "5"});
-  ASSERT_TRUE(ptz::test::handleUntil(
-      lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-view"]["up"]; }, 30s));
+  DetectAndView p;
+  startDetectAndView(lcm, l, "view_shots", {"--max-wait-s", "5"}, &p);
+  if (HasFatalFailure()) return;
+  const std::string& shots = p.shots;
+  ChildProcess& view = *p.view;
   // The ball stands still, so any frame drawn shows it where its detections say.
   ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                     PTZ_SOURCE_DIR "/config/sim_paper.yaml", "--clock", "realtime", "--encoding",
@@ -411,16 +430,12 @@ TEST(View, APreviewIsDrawnAtTheRigsSizeUnderTheOverlay) {
   lcm::LCM lcm(ptz::test::kTestUrl);
   Listener l;
   l.listen(lcm);
-  const std::string shots = std::string(::testing::TempDir()) + "/view_preview_shots";
-  shell("rm -rf '" + shots + "'");
-  ::mkdir(shots.c_str(), 0755);
-  ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
-                       PTZ_SOURCE_DIR "/config/detect_default.yaml"});
-  ChildProcess view({PTZ_VIEW_BIN, "--lcm-url", ptz::test::kTestUrl, "--preview", "true",
-                     "--screenshot-dir", shots, "--screenshot-after-frames", "3", "--max-wait-s",
-                     "5"});
-  ASSERT_TRUE(ptz::test::handleUntil(
-      lcm, [&] { return l.counters["ptz-detect"]["up"] && l.counters["ptz-view"]["up"]; }, 30s));
+  DetectAndView p;
+  startDetectAndView(lcm, l, "view_preview_shots",
+                     {"--preview", "true", "--screenshot-after-frames", "3", "--max-wait-s", "5"},
+                     &p);
+  if (HasFatalFailure()) return;
+  const std::string& shots = p.shots;
   ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                     PTZ_SOURCE_DIR "/config/sim_paper.yaml", "--clock", "realtime", "--encoding",
                     "jpeg", "--frames", "90", "--preview-rate-hz", "10", "--preview-width-px",
@@ -458,7 +473,7 @@ TEST(View, APreviewIsDrawnAtTheRigsSizeUnderTheOverlay) {
     EXPECT_TRUE(p[2] > 60 && p[2] > 2 * p[1] && p[2] > 2 * p[0])
         << "side " << side << ": not the red ball at its detection: " << p;
   }
-  view.stop();
+  p.view->stop();
 }
 
 // Our own frame with two tracks and the controller coasting: the tracks drawn where they project
