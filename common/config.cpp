@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -369,6 +370,7 @@ void Params::setFrom(const std::string& raw_name, const std::string& value,
   }
   e.value = v;
   e.source = source;
+  e.from_config = false;
 }
 
 void Params::set(const std::string& name, const std::string& value) {
@@ -401,6 +403,7 @@ void Params::readConfigFile(const std::string& path) {
       throw ConfigError(where + ": field '" + key + "' must be a single value");
     }
     setFrom(key, text, where);
+    entries_[normalise(key)].from_config = true;
   }
 }
 
@@ -457,6 +460,24 @@ bool Params::getBool(const std::string& name) const {
 }
 std::string Params::getString(const std::string& name) const {
   return entry(name).value;
+}
+
+std::string Params::getPath(const std::string& name) const {
+  const Entry& e = entry(name);
+  const std::filesystem::path value(e.value);
+  if (e.value.empty() || value.is_absolute() || !e.from_config) return e.value;
+  return (std::filesystem::path(config_path_).parent_path() / value).lexically_normal().string();
+}
+
+std::string Params::getExistingPath(const std::string& name) const {
+  const std::string path = getPath(name);
+  std::error_code ec;
+  if (path.empty() || std::filesystem::is_regular_file(path, ec)) return path;
+  const Entry& e = entry(name);
+  std::string problem = std::filesystem::exists(path, ec) ? "is not a file" : "does not exist";
+  if (path != e.value) problem += " (relative paths in a config file are from its folder)";
+  throw ConfigError(e.source + ": parameter '" + name + "' = '" + e.value + "': '" + path + "' " +
+                    problem);
 }
 
 cv::FileNode Params::section(const std::string& name) const {

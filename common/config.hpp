@@ -117,6 +117,13 @@ class Params {
   int getInt(const std::string& name) const;
   bool getBool(const std::string& name) const;
   std::string getString(const std::string& name) const;
+  // A file a string parameter names, e.g. a model or rig file. A relative path read from the
+  // config file is relative to that file's folder (one config folder works from anywhere, an
+  // installed one too); from a flag or the default, to the current directory. Empty stays empty.
+  std::string getPath(const std::string& name) const;
+  // getPath of a file that must exist: else ConfigError naming the source, the parameter, its
+  // value and the resolved path. Empty stays empty (for optional files).
+  std::string getExistingPath(const std::string& name) const;
   // A section of the config file (none() when absent).
   cv::FileNode section(const std::string& name) const;
   const std::string& configPath() const { return config_path_; }
@@ -136,6 +143,7 @@ class Params {
     std::string help;
     Range range;
     std::string source = "default";
+    bool from_config = false;  // read from the config file: relative paths from its folder
   };
   struct Order {
     std::string smaller, larger;

@@ -205,7 +205,7 @@ void StereoRig::save(const std::string& path,
 }
 
 StereoRig rigFromParams(const Params& params) {
-  const std::string path = params.getString("rig_file");
+  const std::string path = params.getExistingPath("rig_file");
   return path.empty() ? StereoRig::makeDefault() : StereoRig::load(path);
 }
 

@@ -1,7 +1,38 @@
 # Shared by the scripts: paths, the package list, install and build steps.
 # shellcheck shell=bash
+# Two layouts. The source tree: PTZ_ROOT is the checkout, programs in the build dir PTZ_BUILD.
+# An install (cmake --install, the .deb): these scripts in PREFIX/share/ptzstereo/scripts beside
+# install-paths.sh (written by the install), PTZ_ROOT is PREFIX/share/ptzstereo (config/,
+# scripts/), programs in PREFIX/bin; every path from this folder, so a moved prefix still works.
 PTZ_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-PTZ_BUILD=${PTZ_BUILD:-$PTZ_ROOT/build}
+PTZ_INSTALLED=0
+if [ -f "$PTZ_ROOT/scripts/install-paths.sh" ]; then
+  PTZ_INSTALLED=1
+  source "$PTZ_ROOT/scripts/install-paths.sh"  # PTZ_INSTALL_BIN, PTZ_INSTALL_JAVA: from scripts/
+  PTZ_BIN_DIR=$(cd "$PTZ_ROOT/scripts" && cd "$PTZ_INSTALL_BIN" && pwd)
+  PTZ_TYPES_JAR=$(cd "$PTZ_ROOT/scripts" && cd "$PTZ_INSTALL_JAVA" && pwd)/ptzstereo_lcmtypes.jar
+  PTZ_OUT=${PTZ_OUT:-$PWD/out}  # runs' output: the install is no place for it
+else
+  PTZ_BUILD=${PTZ_BUILD:-$PTZ_ROOT/build}
+  PTZ_TYPES_JAR=$PTZ_BUILD/ptzstereo_lcmtypes.jar
+  PTZ_OUT=${PTZ_OUT:-$PTZ_ROOT/out}
+fi
+
+# ptz_bin NAME: the path of program NAME (ptz-sim, ptz-detect, ...) in this layout. A program not
+# there is named with what to do; the path is printed all the same (its run then fails by name).
+ptz_bin() {
+  local name=$1 d
+  if [ "$PTZ_INSTALLED" = 1 ]; then
+    [ -x "$PTZ_BIN_DIR/$name" ] || echo "ptz_bin: $PTZ_BIN_DIR/$name is missing (reinstall)" >&2
+    echo "$PTZ_BIN_DIR/$name"
+    return 0
+  fi
+  for d in sim perception control tools ptz_driver; do
+    [ -x "$PTZ_BUILD/$d/$name" ] && { echo "$PTZ_BUILD/$d/$name"; return 0; }
+  done
+  echo "ptz_bin: $name is not built in $PTZ_BUILD (build it, or set PTZ_BUILD)" >&2
+  echo "$PTZ_BUILD/$name"
+}
 
 # Debian 12 / Ubuntu packages the project builds, tests and runs with.
 PTZ_PACKAGES=(
@@ -17,6 +48,8 @@ PTZ_PACKAGES=(
   gstreamer1.0-tools
   default-jdk-headless libjchart2d-java
   iproute2 nftables xvfb x11-apps imagemagick xdotool gnuplot-nox
+  # Foxglove: MCAP export (JSON messages, zstd chunks) and the WebSocket bridge
+  nlohmann-json3-dev libzstd-dev zlib1g-dev libwebsocketpp-dev libasio-dev
 )
 
 ptz_sudo() {
@@ -24,6 +57,7 @@ ptz_sudo() {
 }
 
 ptz_install_deps() {
+  [ "$PTZ_INSTALLED" = 0 ] || return 0  # an install's package declares what it needs
   local missing=()
   for p in "${PTZ_PACKAGES[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -37,7 +71,20 @@ ptz_install_deps() {
     "${missing[@]}"
 }
 
+# Node.js and npm for the test-only JavaScript checkers (test/js: @mcap/core, @foxglove/schemas,
+# @foxglove/ws-protocol). A machine that has a node of its own (e.g. NodeSource's, which bundles
+# npm) keeps it: Debian's npm package would conflict with it.
+ptz_install_node() {
+  if command -v node >/dev/null && command -v npm >/dev/null; then
+    return 0
+  fi
+  echo "Installing: nodejs npm"
+  ptz_sudo apt-get update -q
+  ptz_sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
+}
+
 ptz_build() {
+  [ "$PTZ_INSTALLED" = 0 ] || return 0  # nothing to build: the programs are installed
   cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
   cmake --build "$PTZ_BUILD" -j2
 }

@@ -93,8 +93,9 @@ class SimNode {
       if (p.getString("visca_model").empty()) {
         throw ConfigError("parameter 'visca_port' needs 'visca_model' (a VISCA model file)");
       }
-      visca_ = std::make_unique<ViscaServer>(driver::ViscaModel::load(p.getString("visca_model")),
-                                             "127.0.0.1", p.getInt("visca_port"));
+      visca_ =
+          std::make_unique<ViscaServer>(driver::ViscaModel::load(p.getExistingPath("visca_model")),
+                                        "127.0.0.1", p.getInt("visca_port"));
     } else {
       setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
           *lcm_, ch_setpoint_, status_,

@@ -40,7 +40,9 @@ void declare(Params& p) {
         Range::between(2, 1000));
   p.add("square_m", 0.025, "m", "side of a board square", Range::above(0));
   p.add("output", "rig_calibrated.yaml", "rig file to write (StereoRig + calibration report)");
-  p.add("camera_info_dir", "", "also write ROS camera_info left.yaml/right.yaml here; empty: no");
+  p.add("camera_info_dir", "",
+        "also write ROS camera_info here (created if missing): left.yaml/right.yaml at zoom 1, "
+        "left_zoomZ.yaml/right_zoomZ.yaml at every other zoom of the rig; empty: no");
   p.add("zoom", 1.0, "", "zoom position of both cameras in the images (their zoom table entry)",
         Range::above(0));
   p.add("min_views", 8, "", "fewest views with the board in both images", Range::atLeast(1));
@@ -69,6 +71,30 @@ BoardSpec boardOf(const Params& p) {
   return {p.getInt("board_cols"), p.getInt("board_rows"), p.getDouble("square_m")};  // ranged
 }
 
+// Progress lines on stderr, one sink for the run: every stage line, per-image lines at most 4 a
+// second (the last of a run of them is printed before the next stage or at an empty stage line).
+const Progress& stderrProgress() {
+  struct State {
+    std::chrono::steady_clock::time_point last_printed{};
+    std::string pending;
+  };
+  static const Progress progress = [state = std::make_shared<State>()](const std::string& line,
+                                                                       bool stage) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!stage && now - state->last_printed < std::chrono::milliseconds(250)) {
+      state->pending = line;
+      return;
+    }
+    if (stage && !state->pending.empty()) {
+      std::fprintf(stderr, "ptz-calibrate: %s\n", state->pending.c_str());
+    }
+    state->pending.clear();
+    if (!line.empty()) std::fprintf(stderr, "ptz-calibrate: %s\n", line.c_str());
+    state->last_printed = now;
+  };
+  return progress;
+}
+
 StereoOptions optionsOf(const Params& p) {
   StereoOptions o;
   o.min_views = p.getInt("min_views");
@@ -77,6 +103,7 @@ StereoOptions optionsOf(const Params& p) {
   o.min_tilt_deg = p.getDouble("min_tilt_deg");
   o.rectify_alpha = p.getDouble("rectify_alpha");
   o.refine_intrinsics = p.getBool("refine_intrinsics");
+  o.progress = stderrProgress();
   return o;
 }
 
@@ -94,18 +121,30 @@ void printReport(const StereoCalibration& c) {
               cv::norm(c.T) / c.board.square_m, c.views.size());
 }
 
+// camera_info for every zoom of the rig file just written.
+void writeCameraInfos(const Params& p) {
+  const std::string info_dir = p.getString("camera_info_dir");
+  if (info_dir.empty()) return;
+  const StereoRig rig = StereoRig::load(p.getString("output"));
+  for (const auto& path : saveCameraInfos(info_dir, rig, p.getDouble("rectify_alpha"))) {
+    std::printf("wrote %s\n", path.c_str());
+  }
+}
+
+// The output folders can be written: checked before the long part, not after it.
+void checkOutputs(const Params& p) {
+  if (!p.getString("camera_info_dir").empty()) {
+    requireWritableDir(p.getString("camera_info_dir"), "camera_info_dir");
+  }
+}
+
 // Calibrates, prints the report and writes the output files.
 void calibrateAndWrite(const Params& p, const std::vector<ViewPair>& views, cv::Size size) {
   const StereoCalibration c = calibrateStereo(views, boardOf(p), size, optionsOf(p));
   printReport(c);
   saveCalibration(p.getString("output"), c.toRig(p.getDouble("zoom")), c);
   std::printf("wrote %s\n", p.getString("output").c_str());
-  const std::string info_dir = p.getString("camera_info_dir");
-  if (!info_dir.empty()) {
-    saveCameraInfo(info_dir + "/left.yaml", c, Side::kLeft);
-    saveCameraInfo(info_dir + "/right.yaml", c, Side::kRight);
-    std::printf("wrote %s/left.yaml, %s/right.yaml\n", info_dir.c_str(), info_dir.c_str());
-  }
+  writeCameraInfos(p);
 }
 
 // Pairs from an image list (list = true) or a folder.
@@ -117,7 +156,8 @@ DetectedViews detectFiles(const Params& p, const std::string& source, bool list)
   const std::vector<ImagePair> pairs =
       list ? pairsFromList(source)
            : pairsFromFolder(source, p.getString("left_prefix"), p.getString("right_prefix"));
-  DetectedViews detected = detectPairs(pairs, board);
+  DetectedViews detected = detectPairs(pairs, board, stderrProgress());
+  stderrProgress()("", true);  // the last image's line
   for (const auto& s : detected.skipped) std::printf("skipped: %s\n", s.c_str());
   std::printf("board %s found in both images of %zu of %zu pairs\n", board.text().c_str(),
               detected.views.size(), pairs.size());
@@ -128,7 +168,7 @@ std::string rigFileToExtend(const Params& p) {
   if (p.getString("rig_file").empty()) {
     throw ConfigError("--mode " + p.getString("mode") + " needs --rig-file (the home calibration)");
   }
-  return p.getString("rig_file");
+  return p.getExistingPath("rig_file");
 }
 
 void printZoom(double zoom, Side side, const MonoCalibration& m) {
@@ -156,6 +196,7 @@ int runFiles(const Params& p) {
     throw p.invalid("mode", "must be stereo, zoom or pivot");
   }
   if (mode != "stereo") rigFileToExtend(p);  // before the slow part
+  checkOutputs(p);
   const bool list = !p.getString("image_list").empty();
   const std::string source = list ? p.getString("image_list") : p.getString("images_dir");
   if (mode == "pivot") {  // one board station per folder or list
@@ -180,13 +221,17 @@ int runFiles(const Params& p) {
       printZoom(zoom, Side::kRight, step.right);
     }
   }
-  if (mode != "stereo") std::printf("wrote %s\n", p.getString("output").c_str());
+  if (mode != "stereo") {
+    std::printf("wrote %s\n", p.getString("output").c_str());
+    writeCameraInfos(p);
+  }
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("%.2f s\n", s);
   return 0;
 }
 
 int runLive(const Params& p, lcm::LCM& lcm) {
+  checkOutputs(p);
   StatusReporter status(&lcm, p, "ptz-calibrate");
   LiveCollector collector(boardOf(p), p.getDouble("min_coverage_distance"));
   const size_t target = static_cast<size_t>(std::max(1, p.getInt("target_views")));

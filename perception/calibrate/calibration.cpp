@@ -162,7 +162,12 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
     left_px.push_back(v.left_px);
     right_px.push_back(v.right_px);
   }
+  const auto stage = [&](const std::string& line) {
+    if (options.progress) options.progress(line, true);
+  };
+  stage("mono calibration, left camera: " + std::to_string(views.size()) + " views...");
   c.left = calibrateMono(object, left_px, image_size, 0, "left camera");
+  stage("mono calibration, right camera: " + std::to_string(views.size()) + " views...");
   c.right = calibrateMono(object, right_px, image_size, 0, "right camera");
   // Fronto-parallel views leave the focal length unobservable (Zhang): refuse, do not guess.
   const double max_tilt_deg = *std::max_element(c.left.tilt_deg.begin(), c.left.tilt_deg.end());
@@ -175,6 +180,8 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
     throw CalibrationError(s.str());
   }
   cv::Mat view_errors;
+  stage("stereo calibration (R, T" +
+        std::string(options.refine_intrinsics ? " and both cameras' intrinsics" : "") + ")...");
   c.stereo_rms_px = cv::stereoCalibrate(
       object, left_px, right_px, c.left.K, c.left.D, c.right.K, c.right.D, image_size, c.R, c.T,
       c.E, c.F, view_errors,
@@ -207,6 +214,7 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
           std::to_string(options.min_views) +
           ": raise max_view_error_px or take more views (worst: " + c.outliers.front() + ")");
     }
+    stage("again without the " + std::to_string(c.dropped.size()) + " outlier views");
     StereoOptions again = options;
     again.drop_outliers = false;
     StereoCalibration refit = calibrateStereo(kept, board, image_size, again);
@@ -214,6 +222,7 @@ StereoCalibration calibrateStereo(const std::vector<ViewPair>& views, const Boar
     refit.outliers = c.outliers;
     return refit;
   }
+  stage("rectification...");
   cv::stereoRectify(c.left.K, c.left.D, c.right.K, c.right.D, image_size, c.R, c.T, c.R1, c.R2,
                     c.P1, c.P2, c.Q, cv::CALIB_ZERO_DISPARITY, options.rectify_alpha);
   c.rectified_epipolar_px = meanRectifiedEpipolarPx(views, c);

@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ class CalibrationError : public ConfigError {
  public:
   using ConfigError::ConfigError;
 };
+
+// Progress of long work, one line at a time: `stage` lines (a new step) matter, the others
+// (one per image) may be thinned out by the caller.
+using Progress = std::function<void(const std::string& line, bool stage)>;
 
 struct BoardSpec {
   int inner_cols = 9;  // inner corners along a row (not squares)
@@ -72,6 +77,7 @@ struct StereoOptions {
   // Refine both cameras' intrinsics with R, T in cv::stereoCalibrate (from the mono results);
   // false: keep the mono intrinsics fixed.
   bool refine_intrinsics = true;
+  Progress progress;  // stage lines; empty: none
 };
 
 struct ViewReport {
@@ -124,5 +130,13 @@ void copyReportFields(const cv::FileNode& rig_root, cv::FileStorage& fs,
 void copyFileNode(cv::FileStorage& fs, const std::string& name, const cv::FileNode& node);
 // ROS camera_info YAML (plumb_bob) of one camera, rectification and projection included.
 void saveCameraInfo(const std::string& path, const StereoCalibration& c, Side side);
+// camera_info of both cameras at every zoom of the rig's tables (cv::stereoRectify at home with
+// that zoom's intrinsics): left.yaml/right.yaml at zoom 1, left_zoomZ.yaml/right_zoomZ.yaml
+// (Z as %g: left_zoom2.5.yaml) at the others. Returns the files written.
+std::vector<std::string> saveCameraInfos(const std::string& dir, const StereoRig& rig,
+                                         double rectify_alpha);
+// Creates `dir` (and its parents) if missing and checks a file can be written in it: before
+// long work whose results go there. ConfigError naming the folder and the reason.
+void requireWritableDir(const std::string& dir, const std::string& what);
 
 }  // namespace ptz::perception

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <sstream>
 
 namespace ptz::perception {
@@ -106,19 +107,33 @@ struct Found {
 
 }  // namespace
 
-DetectedViews detectPairs(const std::vector<ImagePair>& pairs, const BoardSpec& board) {
+DetectedViews detectPairs(const std::vector<ImagePair>& pairs, const BoardSpec& board,
+                          const Progress& progress) {
   std::vector<std::string> paths;
   for (const auto& p : pairs) {
     paths.push_back(p.left_path);
     paths.push_back(p.right_path);
   }
   std::vector<Found> found(paths.size());
+  std::mutex progress_mutex;
+  size_t done = 0;
   cv::parallel_for_(cv::Range(0, static_cast<int>(paths.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       const cv::Mat image = cv::imread(paths[static_cast<size_t>(i)], cv::IMREAD_GRAYSCALE);
       Found& f = found[static_cast<size_t>(i)];
       f.size = image.size();
       if (!image.empty()) f.ok = findCorners(image, board, &f.corners);
+      if (progress) {
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        ++done;
+        const std::string& path = paths[static_cast<size_t>(i)];
+        progress("image " + std::to_string(done) + "/" + std::to_string(paths.size()) + " (" +
+                     path.substr(path.find_last_of('/') + 1) + "): " +
+                     (image.empty() ? std::string("unreadable")
+                      : f.ok        ? std::to_string(f.corners.size()) + " corners found"
+                                    : std::string("no board")),
+                 false);
+      }
     }
   });
   std::string unreadable;

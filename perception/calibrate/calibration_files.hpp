@@ -41,6 +41,9 @@ struct DetectedViews {
 
 // Reads every image (gray) and finds the board in both, on all cores. Throws CalibrationError for
 // an unreadable file, images of different sizes, or no board found anywhere.
-DetectedViews detectPairs(const std::vector<ImagePair>& pairs, const BoardSpec& board);
+// `progress` gets a line per image as its board search ends (from the worker threads, one at a
+// time).
+DetectedViews detectPairs(const std::vector<ImagePair>& pairs, const BoardSpec& board,
+                          const Progress& progress = {});
 
 }  // namespace ptz::perception

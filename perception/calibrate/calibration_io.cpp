@@ -1,6 +1,11 @@
 // The calibration's output files: the rig file with the report beside the rig's own fields, and
 // ROS camera_info YAML.
+#include <opencv2/calib3d.hpp>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 
@@ -105,6 +110,67 @@ void saveCameraInfo(const std::string& path, const StereoCalibration& c, Side si
   writeMatrix(out, "rectification_matrix", side == Side::kLeft ? c.R1 : c.R2);
   writeMatrix(out, "projection_matrix", side == Side::kLeft ? c.P1 : c.P2);
   if (!out) throw ConfigError("camera_info file '" + path + "': write failed");
+}
+
+namespace {
+
+cv::Mat cameraMatrix(const Intrinsics& in) {
+  return (cv::Mat_<double>(3, 3) << in.fx, 0, in.cx, 0, in.fy, in.cy, 0, 0, 1);
+}
+
+}  // namespace
+
+std::vector<std::string> saveCameraInfos(const std::string& dir, const StereoRig& rig,
+                                         double rectify_alpha) {
+  std::vector<double> zooms;
+  for (const CameraSpec* camera : {&rig.left, &rig.right}) {
+    for (const auto& entry : camera->zoom_table) zooms.push_back(entry.zoom);
+  }
+  std::sort(zooms.begin(), zooms.end());
+  zooms.erase(std::unique(zooms.begin(), zooms.end()), zooms.end());
+  std::vector<std::string> written;
+  for (const double zoom : zooms) {
+    // Both cameras at this zoom (a zoom only one table has: the other's interpolated).
+    StereoCalibration c;
+    c.image_size = {rig.left.width, rig.left.height};
+    const Intrinsics left = rig.left.intrinsicsAt(zoom), right = rig.right.intrinsicsAt(zoom);
+    c.left.K = cameraMatrix(left);
+    c.right.K = cameraMatrix(right);
+    c.left.D = cv::Mat(1, 5, CV_64F, const_cast<double*>(left.distortion.data())).clone();
+    c.right.D = cv::Mat(1, 5, CV_64F, const_cast<double*>(right.distortion.data())).clone();
+    cv::Mat R(3, 3, CV_64F), T(3, 1, CV_64F);
+    for (int r = 0; r < 3; ++r) {
+      T.at<double>(r) = rig.home.T(r);
+      for (int k = 0; k < 3; ++k) R.at<double>(r, k) = rig.home.R(r, k);
+    }
+    cv::stereoRectify(c.left.K, c.left.D, c.right.K, c.right.D, c.image_size, R, T, c.R1, c.R2,
+                      c.P1, c.P2, c.Q, cv::CALIB_ZERO_DISPARITY, rectify_alpha);
+    char suffix[64] = "";
+    if (zoom != 1.0) std::snprintf(suffix, sizeof suffix, "_zoom%g", zoom);
+    for (const Side side : {Side::kLeft, Side::kRight}) {
+      const std::string path = dir + "/" + sideName(side) + suffix + ".yaml";
+      saveCameraInfo(path, c, side);
+      written.push_back(path);
+    }
+  }
+  return written;
+}
+
+void requireWritableDir(const std::string& dir, const std::string& what) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw ConfigError(what + " '" + dir + "': cannot create it: " + ec.message());
+  if (!std::filesystem::is_directory(dir, ec)) {
+    throw ConfigError(what + " '" + dir + "': not a folder");
+  }
+  const std::string probe = dir + "/.ptz-calibrate-write-test";
+  {
+    std::ofstream out(probe);
+    if (!out) {
+      throw ConfigError(what + " '" + dir + "': cannot write in it: " + std::strerror(errno));
+    }
+  }
+  std::filesystem::remove(probe, ec);
 }
 
 }  // namespace ptz::perception

@@ -9,9 +9,12 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 
 #include "common/config.hpp"
 
@@ -160,6 +163,54 @@ bool cloudPoints(const ptzstereo::point_cloud_t& m, std::vector<cv::Point3f>* po
   return true;
 }
 
+std::string pclViewerCamera(const std::vector<cv::Point3f>& points) {
+  // Looking from the head's origin at the points' centroid, up = -y (the head frame's y points
+  // down), the vertical field of view just wide enough for every point in a 4:3 window.
+  constexpr int kWidthPx = 1024, kHeightPx = 768;
+  cv::Vec3d centroid(0, 0, 0);
+  size_t n = 0;
+  for (const auto& p : points) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.z <= 0) continue;
+    centroid += cv::Vec3d(p.x, p.y, p.z);
+    ++n;
+  }
+  cv::Vec3d view = n > 0 ? centroid / static_cast<double>(n) : cv::Vec3d(0, 0, 1);
+  if (cv::norm(view) < 1e-9) view = {0, 0, 1};
+  const double distance_m = cv::norm(view);
+  view /= distance_m;
+  cv::Vec3d up = cv::Vec3d(0, -1, 0) - view * view.dot(cv::Vec3d(0, -1, 0));
+  if (cv::norm(up) < 1e-6) up = {0, 0, 1};  // looking straight up or down
+  up /= cv::norm(up);
+  const cv::Vec3d right = view.cross(up);
+  const double aspect = static_cast<double>(kWidthPx) / kHeightPx;
+  double tan_half = 0, far_m = 1;
+  for (const auto& p : points) {
+    const cv::Vec3d q(p.x, p.y, p.z);
+    const double depth = q.dot(view);
+    if (!std::isfinite(depth) || depth <= 1e-6) continue;
+    tan_half = std::max(
+        {tan_half, std::fabs(q.dot(up)) / depth, std::fabs(q.dot(right)) / (depth * aspect)});
+    far_m = std::max(far_m, cv::norm(q));
+  }
+  const double fovy_rad =
+      std::clamp(2 * std::atan(1.1 * tan_half), 5.0 * CV_PI / 180, 150.0 * CV_PI / 180);
+  const cv::Vec3d focal = view * distance_m;
+  std::ostringstream cam;
+  cam.precision(9);
+  // clip near,far / focal point / position / view up / fovy (rad) / window size / window pos
+  cam << 0.01 << "," << 2 * far_m << "/" << focal[0] << "," << focal[1] << "," << focal[2]
+      << "/0,0,0/" << up[0] << "," << up[1] << "," << up[2] << "/" << fovy_rad << "/" << kWidthPx
+      << "," << kHeightPx << "/0,0\n";
+  return cam.str();
+}
+
+std::string pclViewerCameraPath(const std::string& pcd_path) {
+  const std::string ext = ".pcd";
+  const bool has_ext =
+      pcd_path.size() > ext.size() && pcd_path.compare(pcd_path.size() - 4, 4, ext) == 0;
+  return (has_ext ? pcd_path.substr(0, pcd_path.size() - 4) : pcd_path) + ".cam";
+}
+
 bool writePcd(const ptzstereo::point_cloud_t& m, const std::string& path, std::string* error) {
   pcl::PCLPointCloud2 packed;
   if (!toPcl(m, &packed)) {
@@ -182,6 +233,17 @@ bool writePcd(const ptzstereo::point_cloud_t& m, const std::string& path, std::s
     }
   } catch (const std::exception& e) {
     *error = "cannot write PCD file '" + path + "': " + e.what();
+    return false;
+  }
+  // The cloud stays in the head frame (y down); the view that shows it upright goes beside it.
+  std::vector<cv::Point3f> points;
+  cloudPoints(m, &points);
+  const std::string cam_path = pclViewerCameraPath(path);
+  std::ofstream cam(cam_path);
+  cam << pclViewerCamera(points);
+  cam.close();
+  if (!cam) {
+    *error = "cannot write pcl_viewer camera file '" + cam_path + "': " + std::strerror(errno);
     return false;
   }
   return true;

@@ -41,8 +41,16 @@ ptzstereo::point_cloud_t decimateCloud(const ptzstereo::point_cloud_t& cloud, in
 // has no float x, y, z fields or its sizes disagree.
 bool cloudPoints(const ptzstereo::point_cloud_t& cloud, std::vector<cv::Point3f>* points);
 
-// Binary PCD (pcl_viewer opens it). False with a message naming the file when it cannot be
-// written.
+// pcl_viewer's camera (a `-cam FILE.cam` line) that shows head-frame points upright: from the
+// head's origin towards their centroid, up = -y, all of them in view. pcl_viewer ignores the
+// PCD's VIEWPOINT for this (it moves the cloud with the camera), so the points, which stay in
+// the head frame (y down), would otherwise open upside down.
+std::string pclViewerCamera(const std::vector<cv::Point3f>& points_head_m);
+// Where writePcd puts that camera: the PCD's path with .cam for .pcd.
+std::string pclViewerCameraPath(const std::string& pcd_path);
+
+// Binary PCD and its pcl_viewer camera beside it (`pcl_viewer X.pcd -cam X.cam` shows it
+// upright). False with a message naming the file when either cannot be written.
 bool writePcd(const ptzstereo::point_cloud_t& cloud, const std::string& path, std::string* error);
 
 }  // namespace ptz::perception

@@ -245,7 +245,7 @@ class DetectNode {
       : lcm_(lcm),
         status_(lcm, p, "ptz-detect"),
         rig_(std::move(rig)),
-        rig_file_(p.getString("rig_file")),
+        rig_file_(p.getPath("rig_file")),
         detector_(std::move(dp)),
         target_class_(p.getString("target_class")),
         frame_freshness_(freshnessFrom(p, "frame")),

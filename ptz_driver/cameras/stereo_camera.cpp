@@ -92,7 +92,11 @@ CameraConfig cameraConfigFrom(const Params& p) {
   CameraConfig c;
   for (size_t s = 0; s < 2; ++s) {
     const std::string side = kSide[s];
+    // A file or folder named in the config file is found from its folder; devices, URLs and
+    // pipelines are taken as they are.
     c.source[s] = parseSource(p.getString(side + "_source"), side + "_source");
+    if (!c.source[s].live())
+      c.source[s] = parseSource(p.getPath(side + "_source"), side + "_source");
     CaptureOptions& o = c.capture[s];
     o.width = width;
     o.height = height;
@@ -102,7 +106,7 @@ CameraConfig cameraConfigFrom(const Params& p) {
     o.latency_s = own_latency_s >= 0 ? own_latency_s : p.getDouble("latency_s");
     o.file_fps = p.getDouble("file_fps");
     o.loop = p.getBool("loop");
-    const std::string ts = p.getString(side + "_timestamps");
+    const std::string ts = p.getPath(side + "_timestamps");
     if (c.source[s].live()) {
       if (!ts.empty()) {
         throw ConfigError("parameter '" + side + "_timestamps' is for video files and folders; " +

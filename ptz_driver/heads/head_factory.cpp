@@ -55,9 +55,10 @@ void declareBackendParams(Params& p) {
 namespace {
 
 std::string required(const Params& p, const std::string& name, const std::string& backend) {
-  const std::string v = p.getString(name);
-  if (v.empty()) throw ConfigError("parameter '" + name + "' is required with backend " + backend);
-  return v;
+  if (p.getString(name).empty()) {
+    throw ConfigError("parameter '" + name + "' is required with backend " + backend);
+  }
+  return p.getExistingPath(name);
 }
 
 // The lines of the two heads: one shared when both name the same device.

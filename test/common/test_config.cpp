@@ -1,6 +1,7 @@
 // Params: config file values, flag overrides and errors that name the file, field or flag.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <functional>
 
@@ -159,4 +160,44 @@ TEST(StructuredFiles, UnknownFieldsAndValuesOutOfRangeAreNamedWithTheirPath) {
   EXPECT_EQ(error([&] { ptz::readNumbers(o, "color", 3, where, ptz::Range::between(0, 255)); }),
             where + ".color[1]: must be within 0 .. 255, got '300'");
   EXPECT_EQ(ptz::fieldPath("rig file 'r.yaml'", "image_width"), "rig file 'r.yaml', image_width");
+}
+
+// A file named in a config file is found from the config file's folder, wherever the program
+// runs; from a flag, from the current directory; absolute paths stay. A missing one is named
+// with the config file, the parameter, its value and the resolved path.
+TEST(Params, RelativePathsInAConfigFileAreFromItsFolder) {
+  const std::string dir =
+      (std::filesystem::path(::testing::TempDir()) / "relpaths").lexically_normal().string();
+  std::filesystem::create_directories(dir + "/models");
+  std::ofstream(dir + "/models/m.yaml") << "%YAML:1.0\n---\n";
+  const std::string cfg = dir + "/driver.yaml";
+  std::ofstream(cfg) << "%YAML:1.0\n---\nmodel: \"models/m.yaml\"\nabs: \"/etc/hostname\"\n"
+                        "missing: \"models/none.yaml\"\nempty: \"\"\n";
+  auto make = [] {
+    ptz::Params p("prog", "test");
+    for (const char* name : {"model", "abs", "missing", "empty"}) p.add(name, "", "a file");
+    return p;
+  };
+  ptz::Params p = make();
+  EXPECT_EQ(parseError(p, {"prog", "--config", cfg}), "");
+  EXPECT_EQ(p.getString("model"), "models/m.yaml");
+  EXPECT_EQ(p.getPath("model"), dir + "/models/m.yaml");
+  EXPECT_EQ(p.getExistingPath("model"), dir + "/models/m.yaml");
+  EXPECT_EQ(p.getPath("abs"), "/etc/hostname");
+  EXPECT_EQ(p.getExistingPath("empty"), "");
+  std::string err;
+  try {
+    p.getExistingPath("missing");
+  } catch (const ptz::ConfigError& e) {
+    err = e.what();
+  }
+  EXPECT_EQ(err, "config file '" + cfg + "': parameter 'missing' = 'models/none.yaml': '" + dir +
+                     "/models/none.yaml' does not exist (relative paths in a config file are "
+                     "from its folder)");
+
+  // A flag overrides the file's value and is taken from the current directory.
+  ptz::Params q = make();
+  EXPECT_EQ(parseError(q, {"prog", "--config", cfg, "--model", "here/m.yaml"}), "");
+  EXPECT_EQ(q.getPath("model"), "here/m.yaml");
+  EXPECT_EQ(q.getPath("missing"), dir + "/models/none.yaml");
 }

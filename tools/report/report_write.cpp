@@ -1,8 +1,14 @@
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -28,6 +34,58 @@ void writePtz(const std::string& path, const std::vector<ReportData::Ptz>& rows)
     for (double v : r.v) f << "," << v;
     f << "\n";
   }
+}
+
+// A name from the log (channel, process, counter) as one CSV field or Markdown table cell:
+// control characters, separators and pipes replaced so it cannot add a row or a column.
+std::string fieldText(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    const bool control = static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+    out += control || c == ',' || c == '|' ? '?' : c;
+  }
+  return out;
+}
+
+// Text from the log (channel, process and counter names) as the inside of a single-quoted
+// gnuplot string: a quote doubled, control characters replaced, so a name cannot end the
+// string or the line and run commands of its own.
+std::string gnuplotText(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '\'') {
+      out += "''";
+    } else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
+      out += '?';
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// A distinct colour for series k of n: 20 hand-picked, well separated colours (tab20 reordered:
+// the saturated ten first), then hues around the circle (golden angle) for more.
+std::string seriesColour(size_t k) {
+  static const char* const kPalette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd",
+                                         "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf",
+                                         "#000080", "#ffbb78", "#98df8a", "#ff9896", "#c5b0d5",
+                                         "#c49c94", "#f7b6d2", "#404040", "#dbdb8d", "#9edae5"};
+  constexpr size_t kNamed = sizeof(kPalette) / sizeof(kPalette[0]);
+  if (k < kNamed) return kPalette[k];
+  const double hue = std::fmod((k - kNamed) * 137.507764 + 15.0, 360.0) / 60.0;
+  const double level = 0.35 + 0.1 * static_cast<double>((k - kNamed) % 3);  // value steps
+  const double x = 1 - std::fabs(std::fmod(hue, 2.0) - 1);
+  double rgb[3] = {0, 0, 0};
+  const int sector = static_cast<int>(hue);
+  const int hi[6] = {0, 1, 1, 2, 2, 0}, mid[6] = {1, 0, 2, 1, 0, 2};
+  rgb[hi[sector]] = 1;
+  rgb[mid[sector]] = x;
+  char text[8];
+  std::snprintf(text, sizeof(text), "#%02x%02x%02x", static_cast<int>(255 * (1 - level) * rgb[0]),
+                static_cast<int>(255 * (1 - level) * rgb[1]),
+                static_cast<int>(255 * (1 - level) * rgb[2]));
+  return text;
 }
 
 // One gnuplot script for every figure: labelled axes with units, legends, a title each. Paths
@@ -143,18 +201,20 @@ std::string gnuplotScript(const ReportData& d) {
     int col = 2;
     for (const auto& [name, v] : d.messages_per_bin) {
       g << (col > 2 ? ", " : "") << q << "rates.csv' using 1:($" << col << "/" << d.bin_s << ")";
-      g << " skip 1 with steps lw 2 title '" << name << "'";
+      g << " skip 1 with steps lw 2 lc rgb '" << seriesColour(col - 2) << "' title '"
+        << gnuplotText(name) << "'";
       ++col;
     }
     int64_t most = d.frames_missing_cumulative.empty() ? 0 : d.frames_missing_cumulative.back();
     for (const auto& [name, v] : d.dropped_cumulative) most = std::max(most, v.back());
     g << "\nset ylabel 'dropped (cumulative)'\nset yrange [0:"
       << std::max<int64_t>(1, most * 11 / 10 + 1) << "]\nplot " << q
-      << "drops.csv' using 1:2 skip 1 with steps lw 2 title 'stereo frames missing (seq gaps)'";
+      << "drops.csv' using 1:2 skip 1 with steps lw 2 lc rgb '" << seriesColour(0)
+      << "' title 'stereo frames missing (seq gaps)'";
     col = 3;
     for (const auto& [name, v] : d.dropped_cumulative) {
-      g << ", " << q << "drops.csv' using 1:" << col << " skip 1 with steps lw 2 title '" << name
-        << "'";
+      g << ", " << q << "drops.csv' using 1:" << col << " skip 1 with steps lw 2 lc rgb '"
+        << seriesColour(col - 2) << "' title '" << gnuplotText(name) << "'";
       ++col;
     }
     g << "\nunset multiplot\nset autoscale y\n";
@@ -183,8 +243,57 @@ std::string reportMarkdown(const ReportData& d, const std::string& log_path,
     m << "## " << captions.at(png) << "\n\n![" << captions.at(png) << "](" << png << ")\n\n";
   }
   m << "## Messages\n\n| channel | messages |\n|---|---|\n";
-  for (const auto& [name, n] : d.channel_messages) m << "| " << name << " | " << n << " |\n";
+  for (const auto& [name, n] : d.channel_messages)
+    m << "| " << fieldText(name) << " | " << n << " |\n";
   return m.str();
+}
+
+// gnuplot on the script, in the folder, without a shell: nothing in the folder's name is
+// interpreted. Its output is kept for the error message.
+void runGnuplot(const std::string& dir, const std::string& script) {
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0)
+    throw std::runtime_error("pipe: " + std::string(std::strerror(errno)));
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addchdir_np(&actions, dir.c_str());
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, pipe_fds[1], STDERR_FILENO);
+  std::string program = "gnuplot", arg = script;
+  char* argv[] = {program.data(), arg.data(), nullptr};
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(pipe_fds[1]);
+  if (spawned != 0) {
+    ::close(pipe_fds[0]);
+    if (spawned == ENOENT) {
+      throw std::runtime_error(
+          "gnuplot is not installed (not found on PATH); the plots' script is '" + dir + "/" +
+          script + "'");
+    }
+    throw std::runtime_error("cannot run gnuplot in '" + dir + "': " + std::strerror(spawned));
+  }
+  std::string output;
+  char buf[4096];
+  for (;;) {
+    const ssize_t n = ::read(pipe_fds[0], buf, sizeof(buf));
+    if (n > 0) {
+      if (output.size() < 64 * 1024) output.append(buf, static_cast<size_t>(n));
+    } else if (n == 0 || errno != EINTR) {
+      break;
+    }
+  }
+  ::close(pipe_fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string how = WIFEXITED(status) ? "exit code " + std::to_string(WEXITSTATUS(status))
+                                              : "signal " + std::to_string(WTERMSIG(status));
+    throw std::runtime_error("gnuplot failed (" + how + ") on '" + dir + "/" + script + "'" +
+                             (output.empty() ? "" : ":\n" + output));
+  }
 }
 
 }  // namespace
@@ -251,11 +360,11 @@ std::vector<std::string> writeReport(const ReportData& d, const std::string& log
   {
     auto f = open(dir + "/rates.csv");
     f << "t_s";
-    for (const auto& [name, v] : d.messages_per_bin) f << "," << name;
+    for (const auto& [name, v] : d.messages_per_bin) f << "," << fieldText(name);
     f << "\n";
     auto g = open(dir + "/drops.csv");
     g << "t_s,STEREO_FRAME_missing";
-    for (const auto& [name, v] : d.dropped_cumulative) g << "," << name;
+    for (const auto& [name, v] : d.dropped_cumulative) g << "," << fieldText(name);
     g << "\n";
     for (size_t s = 0;
          s < d.frames_missing_cumulative.size() ||
@@ -273,9 +382,7 @@ std::vector<std::string> writeReport(const ReportData& d, const std::string& log
     pngs.push_back("rates.png");
   }
   open(dir + "/plots.gp") << gnuplotScript(d);
-  if (std::system(("cd '" + dir + "' && gnuplot plots.gp").c_str()) != 0) {
-    throw std::runtime_error("gnuplot failed on '" + dir + "/plots.gp' (is gnuplot installed?)");
-  }
+  runGnuplot(dir, "plots.gp");
   open(dir + "/summary.json") << d.summary.toJson();
   open(dir + "/report.md") << reportMarkdown(d, log_path, pngs);
   files.insert(files.end(), {"plots.gp", "summary.json", "report.md"});

@@ -144,12 +144,39 @@ TEST(CalibrateTool, FrontoParallelViewsAreRefusedAsDegenerate) {
   expectContains(run, dir + "/left10.png");
 }
 
+TEST(CalibrateTool, ACameraInfoFolderThatCannotBeMadeIsRefusedBeforeTheWork) {
+  SKIP_WITHOUT_SAMPLE();
+  const std::string dir = freshDir("info_unwritable");
+  std::ofstream(dir + "/a_file") << "not a folder\n";
+  const ToolRun run = runCalibrate("--images-dir " + sampleDir() + " --output " + dir +
+                                   "/rig.yaml --camera-info-dir " + dir + "/a_file/info");
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_EQ(
+      run.output.rfind(
+          "ptz-calibrate: camera_info_dir '" + dir + "/a_file/info': cannot " + "create it: ", 0),
+      0u)
+      << run.output;
+  EXPECT_EQ(run.output.find("image 1/"), std::string::npos) << "it started the work first";
+  EXPECT_FALSE(fs::exists(dir + "/rig.yaml"));
+}
+
 TEST(CalibrateTool, WritesARigFileEveryProcessLoadsAndRefusesItTruncated) {
   SKIP_WITHOUT_SAMPLE();
   const std::string dir = freshDir("output");
+  const std::string info = dir + "/camera_info/home";  // made by ptz-calibrate
   const ToolRun run = runCalibrate("--images-dir " + sampleDir() + " --output " + dir +
-                                   "/rig.yaml --camera-info-dir " + dir);
+                                   "/rig.yaml --camera-info-dir " + info);
   ASSERT_EQ(run.exit_code, 0) << run.output;
+  // Progress on stderr: the last image's line and every stage, in order.
+  size_t at = 0;
+  for (const std::string& line : std::vector<std::string>{
+           "ptz-calibrate: image 26/26 (", "ptz-calibrate: mono calibration, left camera: 13 views",
+           "ptz-calibrate: mono calibration, right camera", "ptz-calibrate: stereo calibration (",
+           "ptz-calibrate: rectification...", "wrote " + info + "/right.yaml"}) {
+    const size_t next = run.output.find(line, at);
+    ASSERT_NE(next, std::string::npos) << "'" << line << "' (in order) not in:\n" << run.output;
+    at = next;
+  }
   const ptz::StereoRig rig = ptz::StereoRig::load(dir + "/rig.yaml");
   EXPECT_EQ(rig.left.width, 640);
   EXPECT_NEAR(rig.baselineM() / 0.025, 3.345, 3.345 * 0.005);
@@ -161,7 +188,7 @@ TEST(CalibrateTool, WritesARigFileEveryProcessLoadsAndRefusesItTruncated) {
   EXPECT_EQ(report["views"].size(), 13u);
   EXPECT_LE(static_cast<double>(report["rms_stereo_px"]), 0.45);
   EXPECT_FALSE(static_cast<std::string>(report["date_utc"]).empty());
-  EXPECT_TRUE(fs::exists(dir + "/left.yaml") && fs::exists(dir + "/right.yaml"));
+  EXPECT_TRUE(fs::exists(info + "/left.yaml") && fs::exists(info + "/right.yaml"));
 
   // Cut anywhere: load() refuses the file and names it.
   std::ifstream in(dir + "/rig.yaml");

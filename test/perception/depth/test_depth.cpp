@@ -4,6 +4,7 @@
 #include <unistd.h>
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -243,6 +244,13 @@ TEST(Cloud, PcdWrittenOrAClearError) {
   EXPECT_NE(text.find("POINTS 2"), std::string::npos);
   EXPECT_NE(text.find("FIELDS x y z"), std::string::npos);  // PCL's padding shows as "_"
   EXPECT_NE(text.find(" rgb"), std::string::npos);
+  // pcl_viewer's camera beside it (test_pcd_viewer.cpp: what it shows).
+  const std::string cam = ::testing::TempDir() + "ptz_depth_test.cam";
+  std::ifstream cam_in(cam);
+  std::string cam_line;
+  ASSERT_TRUE(std::getline(cam_in, cam_line)) << cam;
+  EXPECT_EQ(std::count(cam_line.begin(), cam_line.end(), '/'), 6) << cam_line;
+  std::remove(cam.c_str());
   std::remove(path.c_str());
   EXPECT_FALSE(perception::writePcd(c, "/nonexistent-dir/cloud.pcd", &error));
   EXPECT_NE(error.find("/nonexistent-dir/cloud.pcd"), std::string::npos) << error;

@@ -1,7 +1,13 @@
 // ptz-report on the committed 2 s run: every plot, and a summary whose numbers match what this
 // test computes from the log on its own (OpenCV's projectPoints for the centring); broken,
-// empty and unrelated logs; a made-up run's track ids and controller states over time.
+// empty and unrelated logs; a made-up run's track ids and controller states over time; folder
+// and channel names that a shell or gnuplot would run; plots.gp re-run in a moved folder;
+// a colour per channel; a missing or failing gnuplot.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -10,8 +16,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
+#include <sstream>
 
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
@@ -246,4 +255,238 @@ TEST(Report, TrackIdsAndControllerStateOverTimeAndTheRunsNumbersOfAKnownRun) {
   const std::string summary = readAll(dir + "/summary.json");
   EXPECT_EQ(jsonNumber(summary, "target_switches"), K::kSwitches);
   EXPECT_NEAR(jsonNumber(summary, "search_time_s"), K::kSearchS, 1e-9);
+}
+
+namespace {
+
+// ptz-report without a shell: argv as given, in folder `cwd`, PATH optionally replaced.
+int spawnReport(const std::vector<std::string>& args, const std::string& cwd, std::string* output,
+                const std::string& path_env = "") {
+  const std::string out = tempPath(
+      std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + ".spawn.txt");
+  std::vector<std::string> strings = {PTZ_REPORT_BIN};
+  strings.insert(strings.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& s : strings) argv.push_back(s.data());
+  argv.push_back(nullptr);
+  std::vector<std::string> env_strings;
+  for (char** e = environ; *e; ++e) {
+    if (!path_env.empty() && std::string(*e).rfind("PATH=", 0) == 0) continue;
+    env_strings.push_back(*e);
+  }
+  if (!path_env.empty()) env_strings.push_back("PATH=" + path_env);
+  std::vector<char*> envp;
+  for (auto& s : env_strings) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addchdir_np(&actions, cwd.c_str());
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+  pid_t pid = 0;
+  const int spawned =
+      posix_spawn(&pid, PTZ_REPORT_BIN, &actions, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  *output = readAll(out);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// gnuplot on plots.gp inside `dir`, as a user would re-run it there.
+int runGnuplotIn(const std::string& dir) {
+  std::string program = "gnuplot", script = "plots.gp";
+  char* argv[] = {program.data(), script.data(), nullptr};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addchdir_np(&actions, dir.c_str());
+  pid_t pid = 0;
+  const int spawned = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// A fresh, empty folder for one test.
+std::string freshDir(const std::string& name) {
+  const std::string dir = tempPath(name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::vector<std::string> filesIn(const std::string& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The single-quoted strings of a gnuplot script ('' inside is a quote).
+std::vector<std::string> quotedStrings(const std::string& script) {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < script.size(); ++i) {
+    if (script[i] != '\'') continue;
+    std::string s;
+    for (++i; i < script.size(); ++i) {
+      if (script[i] == '\'' && i + 1 < script.size() && script[i + 1] == '\'') {
+        s += '\'';
+        ++i;
+      } else if (script[i] == '\'') {
+        break;
+      } else {
+        s += script[i];
+      }
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+// The line of plots.gp that plots `csv` (the first plot command naming it).
+std::string plotLineOf(const std::string& script, const std::string& csv) {
+  std::istringstream in(script);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("plot ", 0) == 0 && line.find("'" + csv + "'") != std::string::npos) return line;
+  }
+  return "";
+}
+
+std::vector<std::string> coloursOf(const std::string& plot_line) {
+  std::vector<std::string> colours;
+  for (size_t at = plot_line.find("lc rgb '"); at != std::string::npos;
+       at = plot_line.find("lc rgb '", at + 1)) {
+    colours.push_back(plot_line.substr(at + 8, 7));
+  }
+  return colours;
+}
+
+}  // namespace
+
+TEST(Report, AFolderNamedWithQuotesSpacesAndShellSyntaxWorksAndRunsNothing) {
+  const std::string cwd = freshDir("hostile-cwd");
+  const std::string parent = freshDir("it's a $(touch pwned) `touch pwned2` dir");
+  const std::string dir = parent + "/report 'x'; touch pwned3";
+  std::string output;
+  ASSERT_EQ(spawnReport({kFixture, "--out", dir}, cwd, &output), 0) << output;
+  EXPECT_EQ(output, "report: " + dir + "/report.md (19 files)\n");
+  for (const char* png : {"ptz.png", "centring.png", "position.png", "delay.png", "rates.png"})
+    EXPECT_FALSE(cv::imread(dir + "/" + png).empty()) << png;
+  // Nothing was run from the name: no file appeared where a shell would have made it.
+  EXPECT_TRUE(filesIn(cwd).empty());
+  EXPECT_EQ(filesIn(parent), std::vector<std::string>{"report 'x'; touch pwned3"});
+  EXPECT_FALSE(std::filesystem::exists(dir + "/pwned3"));
+}
+
+TEST(Report, PlotsGpIsRelativeAndReRunsInAMovedCopyToTheSamePngs) {
+  const std::string dir = freshDir("moved-src") + "/report";
+  std::string output;
+  ASSERT_EQ(spawnReport({kFixture, "--out", dir}, tempPath(""), &output), 0) << output;
+  const std::string script = readAll(dir + "/plots.gp");
+  const auto strings = quotedStrings(script);
+  ASSERT_GT(strings.size(), 20u);
+  for (const auto& s : strings) {
+    EXPECT_NE(s.front(), '/') << "absolute path in plots.gp: " << s;
+    EXPECT_EQ(s.find(tempPath("")), std::string::npos) << "the folder's path in plots.gp: " << s;
+  }
+  // Moved elsewhere, the PNGs removed, gnuplot run inside it: the same pictures again.
+  const std::string copy = freshDir("moved-dst") + "/elsewhere";
+  std::filesystem::copy(dir, copy);
+  const std::vector<std::string> pngs = {"ptz.png", "centring.png", "position.png", "delay.png",
+                                         "rates.png"};
+  for (const auto& png : pngs) ASSERT_TRUE(std::filesystem::remove(copy + "/" + png)) << png;
+  ASSERT_EQ(runGnuplotIn(copy), 0);
+  for (const auto& png : pngs) {
+    const cv::Mat a = cv::imread(dir + "/" + png), b = cv::imread(copy + "/" + png);
+    ASSERT_FALSE(b.empty()) << png << " was not made again";
+    ASSERT_EQ(a.size(), b.size()) << png;
+    EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0) << png << " differs";
+  }
+}
+
+TEST(Report, EveryChannelHasItsOwnColourAndLcmSelfTestIsLeftOut) {
+  // The fixture has LCM's self-test messages (lcm-logger records them).
+  ASSERT_NE(readAll(kFixture).find("LCM_SELF_TEST"), std::string::npos);
+  const std::string dir = freshDir("colours") + "/report";
+  std::string output;
+  ASSERT_EQ(spawnReport({kFixture, "--out", dir}, tempPath(""), &output), 0) << output;
+  for (const char* file : {"rates.csv", "plots.gp", "report.md", "drops.csv", "summary.json"})
+    EXPECT_EQ(readAll(dir + "/" + file).find("LCM_SELF_TEST"), std::string::npos) << file;
+  const std::string rates = readAll(dir + "/rates.csv");
+  const std::string header = rates.substr(0, rates.find('\n'));
+  const auto channels = std::count(header.begin(), header.end(), ',');
+  ASSERT_GE(channels, 10) << header;
+  for (const char* csv : {"rates.csv", "drops.csv"}) {
+    const std::string line = plotLineOf(readAll(dir + "/plots.gp"), csv);
+    const auto colours = coloursOf(line);
+    long series = 0;  // one per mention of the CSV
+    for (size_t at = line.find("'" + std::string(csv) + "'"); at != std::string::npos;
+         at = line.find("'" + std::string(csv) + "'", at + 1)) {
+      ++series;
+    }
+    EXPECT_EQ(static_cast<long>(colours.size()), series) << line;
+    if (std::string(csv) == "rates.csv") {
+      EXPECT_EQ(static_cast<long>(colours.size()), channels);
+    }
+    const std::set<std::string> distinct(colours.begin(), colours.end());
+    EXPECT_EQ(distinct.size(), colours.size()) << csv << ": a colour is used twice: " << line;
+  }
+}
+
+TEST(Report, AChannelNamedLikeGnuplotCommandsIsOnlyATitle) {
+  // The fixture plus one message on a channel whose name tries to end the title and run a
+  // command in gnuplot; logged at time 0, before the first event (times that go back).
+  const std::string log = tempPath("hostile_channel.lcmlog");
+  const std::string dir = freshDir("hostile-channel") + "/report";
+  const std::string marker = tempPath("hostile-channel/ran");
+  {
+    lcm::LogFile in(kFixture, "r"), out(log, "w");
+    while (const lcm::LogEvent* ev = in.readNextEvent()) {
+      lcm::LogEvent copy = *ev;
+      out.writeEvent(&copy);
+    }
+    uint8_t byte = 0;
+    lcm::LogEvent ev{};
+    ev.channel = "X'\nsystem('touch " + marker + "')\nprint '";
+    ev.datalen = 1;
+    ev.data = &byte;
+    out.writeEvent(&ev);
+  }
+  std::string output;
+  ASSERT_EQ(spawnReport({log, "--out", dir}, tempPath(""), &output), 0) << output;
+  EXPECT_FALSE(std::filesystem::exists(marker)) << "gnuplot ran a command from a channel name";
+  EXPECT_NE(readAll(dir + "/plots.gp").find("title 'X''?system(''touch "), std::string::npos);
+}
+
+TEST(Report, AMissingGnuplotIsReportedAsSuch) {
+  const std::string empty_path = freshDir("no-gnuplot-path");
+  std::string output;
+  EXPECT_EQ(spawnReport({kFixture, "--out", tempPath("no-gnuplot.report")}, tempPath(""), &output,
+                        empty_path),
+            8);
+  EXPECT_EQ(output.rfind("ptz-report: gnuplot is not installed (not found on PATH)", 0), 0u)
+      << output;
+  EXPECT_FALSE(std::filesystem::exists(tempPath("no-gnuplot.report")));
+}
+
+TEST(Report, AFailingGnuplotShowsWhatGnuplotSaid) {
+  // A "gnuplot" that fails with a message of its own, first on PATH.
+  const std::string bin = freshDir("fake-gnuplot");
+  {
+    std::ofstream f(bin + "/gnuplot");
+    f << "#!/bin/sh\necho \"line 3: unknown terminal type\" >&2\nexit 1\n";
+  }
+  std::filesystem::permissions(bin + "/gnuplot", std::filesystem::perms::owner_all);
+  std::string output;
+  EXPECT_EQ(spawnReport({kFixture, "--out", tempPath("bad-gnuplot.report")}, tempPath(""), &output,
+                        bin + ":/usr/bin:/bin"),
+            8);
+  EXPECT_NE(output.find("gnuplot failed (exit code 1) on '"), std::string::npos) << output;
+  EXPECT_NE(output.find("plots.gp':\nline 3: unknown terminal type\n"), std::string::npos)
+      << output;
 }

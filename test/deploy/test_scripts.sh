@@ -1,0 +1,189 @@
+#!/usr/bin/env bash
+# The scripts' rough edges and scripts/record, on real processes in a private network:
+# - every script's -h and --help print its usage and exit 0 and do nothing else: apt-get,
+#   cmake, sudo, lcm-logger, ip, ... are stubs on PATH that note being run, and nothing may be
+#   noted or written;
+# - scripts/replay LOG --private-net replays the 2 s fixture (the arguments survive the re-exec);
+# - scripts/record against a lockstep ptz-sim + ptz-detect + ptz-control + ptz-depth run: the
+#   default channels (no POINT_CLOUD, no DISPARITY_IMAGE, the 1 Hz preview kept), every frame
+#   the simulator published; at the same time a --all --split-mb 1 recording whose files are
+#   each within the limit plus one message and together hold every event (their counts per
+#   channel equal the processes' own); --private-net with a command; bad input refused.
+#   test_scripts.sh SOURCE_DIR BUILD_DIR
+set -uo pipefail
+src=$1 build=$2
+if ! unshare -n true 2>/dev/null; then
+  echo "SKIPPED: needs 'unshare -n' (root) for private networks" >&2
+  if [ -n "${CI:-}" ] && [ "${PTZ_ALLOW_SKIP:-0}" != 1 ]; then exit 1; fi
+  exit 77
+fi
+# Everything below in a private network with multicast on lo.
+if [ -z "${PTZ_IN_NETNS:-}" ]; then
+  exec env PTZ_IN_NETNS=1 unshare -n bash -c \
+    'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" "$@"' "$0" "$@"
+fi
+export PTZ_BUILD=$build
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+fail=0
+bad() {
+  echo "FAILED: $*"
+  fail=1
+}
+
+echo "== --help of every script: usage, exit 0, no side effects"
+stubs=$work/stubs calls=$work/calls
+mkdir -p "$stubs"
+: >"$calls"
+for tool in apt-get apt dpkg dpkg-query cmake ctest make clang-format clang-14 sudo lcm-logger \
+  lcm-logplayer ip unshare nsenter sysctl nft java npm node gnuplot; do
+  printf '#!/bin/sh\necho "%s $*" >>"%s"\n' "$tool" "$calls" >"$stubs/$tool"
+  chmod +x "$stubs/$tool"
+done
+scripts=()
+for f in "$src"/scripts/*; do
+  [ -x "$f" ] && [ -f "$f" ] && scripts+=("$f")
+done
+[ ${#scripts[@]} -ge 18 ] || bad "only ${#scripts[@]} scripts found in $src/scripts"
+for f in "${scripts[@]}"; do
+  for flag in -h --help; do
+    name="scripts/$(basename "$f") $flag"
+    cwd=$work/cwd
+    rm -rf "$cwd" && mkdir -p "$cwd/out"
+    out=$(cd "$cwd" && PATH="$stubs:$PATH" PTZ_OUT="$cwd/out" PTZ_BUILD="$cwd/build" \
+      timeout 20 "$f" "$flag" 2>"$work/err")
+    rc=$?
+    [ $rc -eq 0 ] || bad "$name exits $rc: $(cat "$work/err")"
+    grep -q '[Uu]sage' <<<"$out" || bad "$name prints no usage: $out"
+    [ ! -s "$work/err" ] || bad "$name writes to stderr: $(cat "$work/err")"
+    [ ! -s "$calls" ] || bad "$name ran: $(cat "$calls")"
+    : >"$calls"
+    [ -z "$(find "$cwd" -mindepth 1 -not -path "$cwd/out")$(ls -A "$cwd/out")" ] ||
+      bad "$name wrote files: $(find "$cwd" -mindepth 1)"
+  done
+done
+
+echo "== scripts/replay LOG --private-net"
+cp "$src/test/fixtures/closed_loop_2s.lcmlog" "$work/fixture.lcmlog"
+# A relative path and the flag after it: what the re-exec in the namespace must keep.
+out=$(cd "$work" && timeout 120 "$src/scripts/replay" fixture.lcmlog --check --private-net 2>&1)
+rc=$?
+[ $rc -eq 0 ] || bad "replay --private-net exits $rc: $out"
+grep -q "a log file is required" <<<"$out" && bad "replay lost its arguments: $out"
+grep -q "replayed 61 frames: 61 poses identical" <<<"$out" || bad "replay: not the fixture's 61 poses: $out"
+
+# count LOG CHANNEL: messages of CHANNEL in LOG (0 when absent).
+count() {
+  "$build/tools/ptz-log-summary" --log "$1" 2>/dev/null |
+    awk -v c="$2" '$1 == c && $2 ~ /^[0-9]+$/ {n = $2} END {print n + 0}'
+}
+# counter LOG PROCESS WORDS...: the value after WORDS in PROCESS's last status in LOG.
+counter() {
+  local log=$1 process=$2
+  shift 2
+  "$build/tools/ptz-log-summary" --log "$log" 2>/dev/null | awk -v p="$process" -v w="$*" '
+    /last status/ {q = $1} q == p && index($0, "  " w " ") == 1 {
+      n = split(w, a, " "); print $(n + 1) + 0; exit }'
+}
+
+echo "== scripts/record: defaults, and --all --split-mb 1 at the same time, on a lockstep run"
+cat >"$work/loop.sh" <<'EOF'
+#!/usr/bin/env bash
+# ptz-detect, ptz-control, ptz-depth (1 Hz preview) and 2 s (sim time) of lockstep ptz-sim.
+B=$1 src=$2
+"$B/perception/ptz-detect" --config "$src/config/detect_default.yaml" >/dev/null 2>&1 & d=$!
+"$B/control/ptz-control" >/dev/null 2>&1 & c=$!
+"$B/perception/ptz-depth" --follow-target false --cloud-preview-rate-hz 1 >/dev/null 2>&1 & p=$!
+"$B/tools/ptz-wait-for" --timeout-s 30 \
+  --channels PROCESS_STATUS_PTZ_DETECT,PROCESS_STATUS_PTZ_CONTROL,PROCESS_STATUS_PTZ_DEPTH >/dev/null
+"$B/sim/ptz-sim" --config "$src/config/sim_default.yaml" --clock lockstep --encoding jpeg \
+  --duration-s 2 >/dev/null
+rc=$?
+kill -INT $d $c $p
+wait $d $c $p
+exit $rc
+EOF
+chmod +x "$work/loop.sh"
+"$src/scripts/record" --out "$work/split" --all --split-mb 1 --quiet \
+  --ready-file "$work/split.ready" &
+split_pid=$!
+until [ -f "$work/split.ready" ]; do
+  kill -0 $split_pid 2>/dev/null || { bad "record --split-mb did not start"; break; }
+  sleep 0.05 # polling its start-up
+done
+timeout 120 "$src/scripts/record" --out "$work/rec" -- "$work/loop.sh" "$build" "$src" \
+  >"$work/rec.out" 2>&1 || bad "record -- loop.sh failed: $(cat "$work/rec.out")"
+kill -TERM $split_pid
+wait $split_pid || bad "record --split-mb exits $?"
+
+log=$work/rec/run.lcmlog
+published=$(counter "$log" ptz-sim frames_published)
+echo "ptz-sim published ${published:-?} frames; recorded $(count "$log" STEREO_FRAME)"
+[ "${published:-0}" -ge 55 ] || bad "ptz-sim published ${published:-no} frames (2 s at 30 Hz: 61)"
+[ "$(count "$log" STEREO_FRAME)" = "$published" ] ||
+  bad "STEREO_FRAME: $(count "$log" STEREO_FRAME) recorded of $published published"
+[ "$(count "$log" SIM_TRUTH)" = "$published" ] ||
+  bad "SIM_TRUTH: $(count "$log" SIM_TRUTH) recorded of $published"
+for c in OBJECT_POSE PTZ_STATE PTZ_SETPOINT PROCESS_STATUS_PTZ_DEPTH POINT_CLOUD_PREVIEW; do
+  [ "$(count "$log" "$c")" -gt 0 ] || bad "the default recording lacks $c"
+done
+clouds=$(counter "$log" ptz-depth out POINT_CLOUD)
+[ "${clouds:-0}" -gt 0 ] || bad "ptz-depth published no clouds (its status: ${clouds:-none})"
+[ "$(count "$log" POINT_CLOUD)" = 0 ] || bad "the default recording holds POINT_CLOUD"
+[ "$(count "$log" DISPARITY_IMAGE)" = 0 ] || bad "the default recording holds DISPARITY_IMAGE"
+grep -q "STEREO_FRAME  *$published " "$work/rec.out" ||
+  bad "record's own summary lacks the frames: $(cat "$work/rec.out")"
+
+shopt -s nullglob
+pieces=("$work"/split/run.lcmlog.*)
+echo "split: ${#pieces[@]} files, $(cat "${pieces[@]}" /dev/null | wc -c) bytes"
+[ ${#pieces[@]} -ge 3 ] || bad "--split-mb 1 on ~7 MB made ${#pieces[@]} files"
+for f in "${pieces[@]}"; do
+  # the limit (1 MiB) plus the message that crossed it (a full cloud: ~0.3 MB)
+  [ "$(stat -c %s "$f")" -le $((1048576 + 600000)) ] || bad "$f: $(stat -c %s "$f") bytes"
+done
+# An LCM log is a sequence of events: the pieces end to end are the whole recording (one piece
+# alone may hold none of the channels ptz-log-summary needs to read it).
+cat "${pieces[@]}" /dev/null >"$work/joined.lcmlog"
+total() { count "$work/joined.lcmlog" "$1"; }  # CHANNEL: its messages over all the pieces
+[ "$(total STEREO_FRAME)" = "$published" ] ||
+  bad "split STEREO_FRAME: $(total STEREO_FRAME) of $published"
+[ "$(total POINT_CLOUD)" = "$clouds" ] || bad "split POINT_CLOUD: $(total POINT_CLOUD) of $clouds"
+for c in OBJECT_POSE PTZ_SETPOINT POINT_CLOUD_PREVIEW; do
+  [ "$(total "$c")" = "$(count "$log" "$c")" ] ||
+    bad "split $c: $(total "$c"), the default recording $(count "$log" "$c")"
+done
+
+echo "== scripts/record --private-net -- ptz-sim (realtime, 0.5 s)"
+out=$(timeout 60 "$src/scripts/record" --private-net --out "$work/pn" --no-frames -- \
+  "$build/sim/ptz-sim" --config "$src/config/sim_default.yaml" --encoding jpeg --duration-s 0.5 2>&1)
+[ $? -eq 0 ] || bad "record --private-net failed: $out"
+pn_published=$(counter "$work/pn/run.lcmlog" ptz-sim frames_published)
+[ "${pn_published:-0}" -gt 0 ] || bad "record --private-net: no status of ptz-sim: $out"
+[ "$(count "$work/pn/run.lcmlog" STEREO_FRAME)" = 0 ] || bad "--no-frames recorded STEREO_FRAME"
+[ "$(count "$work/pn/run.lcmlog" SIM_TRUTH)" = "${pn_published:-x}" ] ||
+  bad "record --private-net: SIM_TRUTH $(count "$work/pn/run.lcmlog" SIM_TRUTH) of $pn_published"
+
+echo "== scripts/record: bad input refused, with the reason"
+expect() {  # CODE PATTERN ARGS...: record ARGS exits CODE saying PATTERN on stderr
+  local code=$1 pattern=$2
+  shift 2
+  local err rc
+  err=$(timeout 20 "$src/scripts/record" "$@" 2>&1 >/dev/null)
+  rc=$?
+  [ $rc -eq "$code" ] || bad "record $*: exit $rc, not $code ($err)"
+  grep -q -- "$pattern" <<<"$err" || bad "record $*: no '$pattern' in: $err"
+}
+expect 2 "not a valid regular expression" --out "$work/x" --channels '(bad'
+expect 2 "not a valid regular expression" --out "$work/x" --exclude 'a['
+expect 2 "--all records every channel" --out "$work/x" --all --exclude STEREO_FRAME
+expect 2 "--split-mb must be" --out "$work/x" --split-mb 0
+expect 2 "--duration must be" --out "$work/x" --duration soon
+expect 2 "needs a COMMAND" --out "$work/x" --private-net
+expect 2 "unknown argument" --out "$work/x" --bogus
+expect 1 "already exists" --out "$work/rec" --duration 0.1
+expect 1 "no process 999999999" --out "$work/x" --net-of 999999999
+[ ! -e "$work/x" ] || bad "a refused record wrote $work/x"
+
+[ $fail -eq 0 ] && echo "PASSED"
+exit $fail

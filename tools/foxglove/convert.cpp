@@ -1,0 +1,550 @@
+#include "tools/foxglove/convert.hpp"
+
+#include <glib.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "common/measure.hpp"
+#include "common/message_check.hpp"
+#include "common/transport.hpp"
+#include "ptzstereo/point_cloud_t.hpp"
+#include "tools/foxglove/foxglove_schemas.hpp"
+#include "tools/foxglove/lcm_json.hpp"
+
+namespace ptz::foxglove {
+namespace {
+
+using nlohmann::json;
+
+json stamp(int64_t utime) {
+  const int64_t t = std::max<int64_t>(utime, 0);
+  return {{"sec", t / 1'000'000}, {"nsec", (t % 1'000'000) * 1000}};
+}
+json vec3(const Eigen::Vector3d& v) {
+  return {{"x", v.x()}, {"y", v.y()}, {"z", v.z()}};
+}
+json quat(const Eigen::Quaterniond& q) {
+  return {{"x", q.x()}, {"y", q.y()}, {"z", q.z()}, {"w", q.w()}};
+}
+json rgba(double r, double g, double b, double a) {
+  return {{"r", r}, {"g", g}, {"b", b}, {"a", a}};
+}
+json point2(double x, double y) {
+  return {{"x", x}, {"y", y}};
+}
+
+std::string base64(const void* data, size_t size) {
+  gchar* text = g_base64_encode(static_cast<const guchar*>(data), size);
+  std::string out(text);
+  g_free(text);
+  return out;
+}
+
+int64_t saturatingNs(int64_t utime) {
+  int64_t ns;
+  return __builtin_mul_overflow(std::max<int64_t>(utime, 0), 1000, &ns) ? INT64_MAX : ns;
+}
+
+// The world frame of the 3D view: z up, x forward (the head's home optical axis), y left.
+Eigen::Quaterniond worldFromHead() {
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(0, -1, 0);  // head x (right)
+  r.col(1) = Eigen::Vector3d(0, 0, -1);  // head y (down)
+  r.col(2) = Eigen::Vector3d(1, 0, 0);   // head z (forward)
+  return Eigen::Quaterniond(r);
+}
+
+const char* const kSides[] = {"left", "right"};
+constexpr size_t kMaxStatusTopics = 64;
+constexpr size_t kMaxCountKeys = 256;
+constexpr size_t kShownFrames = 64;  // frames whose images were converted, for their annotations
+
+}  // namespace
+
+struct Converter::Impl {
+  StereoRig rig;
+  ConvertOptions options;
+  std::vector<Topic> topics;
+  std::map<std::string, int> topic_index;
+  RateSchedule image_schedule, preview_schedule, cloud_schedule;
+  // seq -> output width / frame width of the images converted, per side.
+  std::deque<std::pair<int64_t, std::array<double, 2>>> shown;
+  std::map<std::string, int64_t> dropped, converted, ignored;
+
+  Impl(StereoRig r, ConvertOptions o)
+      : rig(std::move(r)),
+        options(o),
+        image_schedule(o.image_rate_hz),
+        preview_schedule(o.image_rate_hz),
+        cloud_schedule(o.cloud_rate_hz) {
+    for (const char* side : kSides) {
+      const std::string s = std::string("/") + side;
+      addFoxglove(s + "/image", "foxglove.CompressedImage");
+      addFoxglove(s + "/camera_info", "foxglove.CameraCalibration");
+      addFoxglove(s + "/detections", "foxglove.ImageAnnotations");
+      addFoxglove("/preview" + s + "/image", "foxglove.CompressedImage");
+      addFoxglove("/preview" + s + "/camera_info", "foxglove.CameraCalibration");
+    }
+    addFoxglove("/tf", "foxglove.FrameTransforms");
+    addFoxglove("/cloud", "foxglove.PointCloud");
+    addFoxglove("/cloud_preview", "foxglove.PointCloud");
+    addFoxglove("/objects", "foxglove.SceneUpdate");
+    addFoxglove("/truth", "foxglove.SceneUpdate");
+    addOwn("/ptz_state", "ptzstereo.ptz_state_t", toJson(ptzstereo::ptz_state_t{}));
+    addOwn("/ptz_setpoint", "ptzstereo.ptz_setpoint_t", toJson(ptzstereo::ptz_setpoint_t{}));
+    addOwn("/control_state", "ptzstereo.control_state_t", toJson(ptzstereo::control_state_t{}));
+    ptzstereo::object_detections_t detections{};
+    detections.left.resize(1);
+    addOwn("/object_detections", "ptzstereo.object_detections_t", toJson(detections));
+    ptzstereo::object_pose_t pose{};
+    pose.objects.resize(1);
+    addOwn("/object_pose", "ptzstereo.object_pose_t", toJson(pose));
+    ptzstereo::object_tracks_t tracks{};
+    tracks.tracks.resize(1);
+    addOwn("/object_tracks", "ptzstereo.object_tracks_t", toJson(tracks));
+    ptzstereo::sim_truth_t truth{};
+    truth.objects.resize(1);
+    addOwn("/sim_truth", "ptzstereo.sim_truth_t", toJson(truth));
+    addOwn("/target_select", "ptzstereo.target_select_t", toJson(ptzstereo::target_select_t{}));
+  }
+
+  int addTopic(const std::string& name, const std::string& schema_name, const json& schema) {
+    topics.push_back({name, schema_name, schema.dump()});
+    topic_index[name] = static_cast<int>(topics.size()) - 1;
+    return topic_index[name];
+  }
+  void addFoxglove(const std::string& name, const std::string& schema_name) {
+    addTopic(name, schema_name, foxgloveSchema(schema_name));
+  }
+  void addOwn(const std::string& name, const std::string& schema_name, const json& sample) {
+    addTopic(name, schema_name, schemaOf(sample, schema_name));
+  }
+  int topic(const std::string& name) const { return topic_index.at(name); }
+
+  Message message(const std::string& name, int64_t receive_utime, int64_t data_utime,
+                  const json& j) const {
+    return {topic(name), saturatingNs(receive_utime), saturatingNs(data_utime), j.dump()};
+  }
+
+  template <class Msg>
+  bool decode(const std::string& channel, const void* data, size_t size, Msg* msg) {
+    std::string why;
+    if (decodeChecked(data, size, msg, &why)) return true;
+    countDrop(channel, "undecodable");
+    return false;
+  }
+
+  // Channel names come from outside: a bounded number of keys.
+  static void countIn(std::map<std::string, int64_t>* counts, const std::string& key) {
+    if (counts->size() >= kMaxCountKeys && !counts->count(key)) {
+      ++(*counts)["(other channels)"];
+    } else {
+      ++(*counts)[key];
+    }
+  }
+  void countDrop(const std::string& channel, const std::string& reason) {
+    countIn(&dropped, printable(channel, 80) + ": " + reason);
+  }
+
+  json cameraTransform(Side side, int64_t utime, double pan_rad, double tilt_rad) const {
+    Eigen::Matrix3d rotation;
+    Eigen::Vector3d position;
+    rig.cameraPose(side, pan_rad, tilt_rad, &rotation, &position);
+    return {{"timestamp", stamp(utime)},
+            {"parent_frame_id", "head"},
+            {"child_frame_id", std::string(sideName(side)) + "_camera"},
+            {"translation", vec3(position)},
+            {"rotation", quat(Eigen::Quaterniond(rotation).normalized())}};
+  }
+
+  json transforms(int64_t utime, const double (&pan_tilt)[2][2]) const {
+    json world = {{"timestamp", stamp(utime)},
+                  {"parent_frame_id", "world"},
+                  {"child_frame_id", "head"},
+                  {"translation", vec3(Eigen::Vector3d::Zero())},
+                  {"rotation", quat(worldFromHead())}};
+    return {
+        {"transforms",
+         json::array({world, cameraTransform(Side::kLeft, utime, pan_tilt[0][0], pan_tilt[0][1]),
+                      cameraTransform(Side::kRight, utime, pan_tilt[1][0], pan_tilt[1][1])})}};
+  }
+
+  json calibration(Side side, int64_t utime, double zoom, int width, int height) const {
+    const CameraSpec& cam = rig.camera(side);
+    const Intrinsics in = cam.intrinsicsAt(zoom);
+    const double sx = static_cast<double>(width) / cam.width;
+    const double sy = static_cast<double>(height) / cam.height;
+    const double fx = in.fx * sx, fy = in.fy * sy, cx = in.cx * sx, cy = in.cy * sy;
+    json d = json::array();
+    for (double k : in.distortion) d.push_back(k);
+    return {{"timestamp", stamp(utime)},
+            {"frame_id", std::string(sideName(side)) + "_camera"},
+            {"width", width},
+            {"height", height},
+            {"distortion_model", "plumb_bob"},
+            {"D", d},
+            {"K", {fx, 0, cx, 0, fy, cy, 0, 0, 1}},
+            {"R", {1, 0, 0, 0, 1, 0, 0, 0, 1}},
+            {"P", {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0}}};
+  }
+
+  // The image as JPEG of at most max_width_px; its width ratio in *scale. False: undecodable.
+  bool jpegOf(const ptzstereo::image_t& image, std::string* jpeg, double* scale, int* width,
+              int* height) const {
+    const int max_width = options.image_max_width_px;
+    *scale = 1;
+    *width = image.width;
+    *height = image.height;
+    if (image.encoding == ptzstereo::image_t::ENCODING_JPEG &&
+        (max_width <= 0 || image.width <= max_width)) {
+      jpeg->assign(image.data.begin(), image.data.end());
+      return true;
+    }
+    cv::Mat pixels;
+    std::string error;
+    if (!decodeImage(image, &pixels, &error)) return false;
+    if (max_width > 0 && pixels.cols > max_width) {
+      *scale = static_cast<double>(max_width) / pixels.cols;
+      *width = max_width;
+      *height = std::max(1, static_cast<int>(std::lround(pixels.rows * *scale)));
+      cv::resize(pixels, pixels, cv::Size(*width, *height), 0, 0, cv::INTER_AREA);
+    }
+    std::vector<uchar> out;
+    if (!cv::imencode(".jpg", pixels, out, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
+      return false;
+    }
+    jpeg->assign(out.begin(), out.end());
+    return true;
+  }
+
+  void frame(const std::string& channel, const ptzstereo::stereo_frame_t& m, int64_t receive_utime,
+             bool preview, std::vector<Message>* out) {
+    std::string why;
+    if (!checkStereoFrame(m, kMaxImageSidePx, &why)) {
+      countDrop(channel, "bad image");
+      return;
+    }
+    const double pan_tilt[2][2] = {{m.left.pan_rad, m.left.tilt_rad},
+                                   {m.right.pan_rad, m.right.tilt_rad}};
+    out->push_back(message("/tf", receive_utime, m.utime, transforms(m.utime, pan_tilt)));
+    RateSchedule& schedule = preview ? preview_schedule : image_schedule;
+    if (schedule.enabled() && !schedule.take(m.utime)) return;
+    const std::string prefix = preview ? "/preview/" : "/";
+    std::array<double, 2> scales{1, 1};
+    for (int i = 0; i < 2; ++i) {
+      const Side side = static_cast<Side>(i);
+      const ptzstereo::image_t& image = i == 0 ? m.left : m.right;
+      std::string jpeg;
+      int width = 0, height = 0;
+      if (!jpegOf(image, &jpeg, &scales[i], &width, &height)) {
+        countDrop(channel, "undecodable image");
+        return;
+      }
+      const std::string s = prefix + kSides[i];
+      out->push_back(message(s + "/image", receive_utime, m.utime,
+                             {{"timestamp", stamp(m.utime)},
+                              {"frame_id", std::string(kSides[i]) + "_camera"},
+                              {"data", base64(jpeg.data(), jpeg.size())},
+                              {"format", "jpeg"}}));
+      // A preview is smaller than the rig's images: its calibration is scaled to it.
+      out->push_back(message(s + "/camera_info", receive_utime, m.utime,
+                             calibration(side, m.utime, image.zoom, width, height)));
+    }
+    if (!preview) {
+      // Detections are in the frame's pixels; they are drawn on the image as converted.
+      shown.emplace_back(m.seq, scales);
+      if (shown.size() > kShownFrames) shown.pop_front();
+    }
+  }
+
+  void detections(const ptzstereo::object_detections_t& m, int64_t receive_utime,
+                  std::vector<Message>* out) const {
+    const auto it = std::find_if(shown.begin(), shown.end(),
+                                 [&](const auto& s) { return s.first == m.frame_seq; });
+    if (it == shown.end()) return;  // its frame's images were not converted (decimated)
+    for (int i = 0; i < 2; ++i) {
+      const double k = it->second[i];
+      json a = {{"circles", json::array()}, {"points", json::array()}, {"texts", json::array()}};
+      for (const auto& d : i == 0 ? m.left : m.right) {
+        if (!std::isfinite(d.centroid_x_px) || !std::isfinite(d.centroid_y_px)) continue;
+        const json colour = d.match_index >= 0 ? rgba(1, 0, 1, 1) : rgba(1, 1, 0, 1);
+        const double x0 = d.bbox_x_px * k, y0 = d.bbox_y_px * k;
+        const double x1 = x0 + d.bbox_width_px * k, y1 = y0 + d.bbox_height_px * k;
+        a["points"].push_back({{"timestamp", stamp(m.utime)},
+                               {"type", fg::kPointsLineLoop},
+                               {"points", json::array({point2(x0, y0), point2(x1, y0),
+                                                       point2(x1, y1), point2(x0, y1)})},
+                               {"outline_color", colour},
+                               {"outline_colors", json::array()},
+                               {"fill_color", rgba(0, 0, 0, 0)},
+                               {"thickness", 2}});
+        a["circles"].push_back({{"timestamp", stamp(m.utime)},
+                                {"position", point2(d.centroid_x_px * k, d.centroid_y_px * k)},
+                                {"diameter", 6},
+                                {"thickness", 2},
+                                {"fill_color", colour},
+                                {"outline_color", colour}});
+        a["texts"].push_back({{"timestamp", stamp(m.utime)},
+                              {"position", point2(x0, std::max(0.0, y0 - 4))},
+                              {"text", printable(d.class_name, 40)},
+                              {"font_size", 14},
+                              {"text_color", colour},
+                              {"background_color", rgba(0, 0, 0, 0.5)}});
+      }
+      out->push_back(
+          message(std::string("/") + kSides[i] + "/detections", receive_utime, m.utime, a));
+    }
+  }
+
+  // A foxglove.PointCloud of a POINT_CLOUD (PCL's layout), rows packed. False: inconsistent.
+  bool cloud(const ptzstereo::point_cloud_t& m, json* j) const {
+    if (m.width < 0 || m.height < 0 || m.point_step <= 0 || m.row_step < 0 || m.is_bigendian) {
+      return false;
+    }
+    const int64_t points = static_cast<int64_t>(m.width) * m.height;
+    if (static_cast<int64_t>(m.width) * m.point_step > m.row_step && m.height > 0) return false;
+    if (static_cast<int64_t>(m.row_step) * m.height > static_cast<int64_t>(m.data.size())) {
+      return false;
+    }
+    json fields = json::array();
+    for (const auto& f : m.fields) {
+      static const int kSize[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
+      static const int kType[] = {0,          fg::kInt8,   fg::kUint8,   fg::kInt16,  fg::kUint16,
+                                  fg::kInt32, fg::kUint32, fg::kFloat32, fg::kFloat64};
+      if (f.datatype < 1 || f.datatype > 8 || f.offset < 0 || f.count < 1 ||
+          static_cast<int64_t>(f.offset) + int64_t{kSize[f.datatype]} * f.count > m.point_step) {
+        return false;
+      }
+      // PCL packs a colour into a float's bits (0x00RRGGBB): Foxglove reads it as a packed BGR.
+      const int type = f.name == "rgb" && f.datatype == 7 ? fg::kUint32 : kType[f.datatype];
+      fields.push_back({{"name", printable(f.name, 40)}, {"offset", f.offset}, {"type", type}});
+    }
+    std::string packed;
+    packed.reserve(static_cast<size_t>(points * m.point_step));
+    for (int32_t row = 0; row < m.height; ++row) {
+      const auto* begin = m.data.data() + static_cast<size_t>(row) * m.row_step;
+      packed.append(reinterpret_cast<const char*>(begin),
+                    static_cast<size_t>(m.width) * m.point_step);
+    }
+    *j = {{"timestamp", stamp(m.utime)},
+          {"frame_id", "head"},
+          {"pose",
+           {{"position", vec3(Eigen::Vector3d::Zero())},
+            {"orientation", quat(Eigen::Quaterniond::Identity())}}},
+          {"point_stride", m.point_step},
+          {"fields", fields},
+          {"data", base64(packed.data(), packed.size())}};
+    return true;
+  }
+
+  static json entity(const std::string& id, int64_t utime, const Eigen::Vector3d& position,
+                     double radius_m, const Eigen::Quaterniond* orientation, const json& colour,
+                     const std::string& label) {
+    const json pose = {
+        {"position", vec3(position)},
+        {"orientation", quat(orientation ? *orientation : Eigen::Quaterniond::Identity())}};
+    const double size = std::isfinite(radius_m) && radius_m > 0 ? 2 * radius_m : 0.05;
+    const json shape = {
+        {"pose", pose}, {"size", vec3(Eigen::Vector3d::Constant(size))}, {"color", colour}};
+    const json label_pose = {{"position", vec3(position - Eigen::Vector3d(0, size, 0))},
+                             {"orientation", quat(Eigen::Quaterniond::Identity())}};
+    return {{"timestamp", stamp(utime)},
+            {"frame_id", "head"},
+            {"id", id},
+            {"lifetime", {{"sec", 0}, {"nsec", 0}}},
+            {"frame_locked", false},
+            {"metadata", json::array()},
+            {"arrows", json::array()},
+            {"cubes", orientation ? json::array({shape}) : json::array()},
+            {"spheres", orientation ? json::array() : json::array({shape})},
+            {"cylinders", json::array()},
+            {"lines", json::array()},
+            {"triangles", json::array()},
+            {"texts", json::array({{{"pose", label_pose},
+                                    {"billboard", true},
+                                    {"font_size", 14},
+                                    {"scale_invariant", true},
+                                    {"color", rgba(1, 1, 1, 1)},
+                                    {"text", label}}})},
+            {"models", json::array()}};
+  }
+
+  static json sceneUpdate(int64_t utime, json entities) {
+    return {
+        {"deletions",
+         json::array({{{"timestamp", stamp(utime)}, {"type", fg::kSceneDeletionAll}, {"id", ""}}})},
+        {"entities", std::move(entities)}};
+  }
+
+  static bool finite3(const double (&v)[3]) {
+    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+  }
+  static Eigen::Quaterniond quaternion(const double (&wxyz)[4]) {
+    Eigen::Quaterniond q(wxyz[0], wxyz[1], wxyz[2], wxyz[3]);
+    return q.norm() > 1e-9 && std::isfinite(q.norm()) ? q.normalized()
+                                                      : Eigen::Quaterniond::Identity();
+  }
+
+  json trackScene(const ptzstereo::object_tracks_t& m) const {
+    json entities = json::array();
+    for (const auto& t : m.tracks) {
+      if (!finite3(t.position_m)) continue;
+      const bool target = t.id == m.target_id;
+      const json colour = target                         ? rgba(1, 0.1, 0.1, 0.8)
+                          : t.state == t.STATE_CONFIRMED ? rgba(0.2, 0.6, 1, 0.6)
+                          : t.state == t.STATE_COASTING  ? rgba(1, 0.8, 0, 0.5)
+                                                         : rgba(0.7, 0.7, 0.7, 0.4);
+      const Eigen::Quaterniond q = quaternion(t.orientation_wxyz);
+      entities.push_back(entity(
+          "track-" + std::to_string(t.id), m.utime,
+          Eigen::Vector3d(t.position_m[0], t.position_m[1], t.position_m[2]), t.radius_m,
+          t.has_orientation ? &q : nullptr, colour,
+          std::to_string(t.id) + " " + printable(t.class_name, 40) + (target ? " (target)" : "")));
+    }
+    return sceneUpdate(m.utime, entities);
+  }
+
+  json truthScene(const ptzstereo::sim_truth_t& m) const {
+    json entities = json::array();
+    for (const auto& o : m.objects) {
+      if (!finite3(o.position_m)) continue;
+      const Eigen::Quaterniond q = quaternion(o.orientation_wxyz);
+      const std::string name = printable(o.name, 40);
+      entities.push_back(entity("truth-" + name, m.utime,
+                                Eigen::Vector3d(o.position_m[0], o.position_m[1], o.position_m[2]),
+                                o.radius_m, o.shape == "box" ? &q : nullptr, rgba(0.2, 1, 0.2, 0.3),
+                                name));
+    }
+    return sceneUpdate(m.utime, entities);
+  }
+
+  void status(const std::string& channel, const ptzstereo::process_status_t& m,
+              int64_t receive_utime, std::vector<Message>* out) {
+    std::string name;
+    for (char c : m.process.substr(0, 64)) {
+      name +=
+          std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.' ? c : '_';
+    }
+    const std::string topic_name = "/status/" + (name.empty() ? "_" : name);
+    if (!topic_index.count(topic_name)) {
+      if (statusTopics() >= kMaxStatusTopics) {
+        countDrop(channel, "too many processes");
+        return;
+      }
+      ptzstereo::process_status_t sample{};
+      sample.channels.resize(1);
+      sample.counters.resize(1);
+      addTopic(topic_name, "ptzstereo.process_status_t",
+               schemaOf(toJson(sample), "ptzstereo.process_status_t", {"channels", "counters"}));
+    }
+    out->push_back(message(topic_name, receive_utime, m.utime, toJson(m)));
+  }
+
+  size_t statusTopics() const {
+    return std::count_if(topics.begin(), topics.end(),
+                         [](const Topic& t) { return t.name.rfind("/status/", 0) == 0; });
+  }
+};
+
+Converter::Converter(StereoRig rig, ConvertOptions options)
+    : impl_(std::make_unique<Impl>(std::move(rig), options)) {}
+Converter::~Converter() = default;
+
+const std::vector<Topic>& Converter::topics() const {
+  return impl_->topics;
+}
+const std::map<std::string, int64_t>& Converter::dropped() const {
+  return impl_->dropped;
+}
+const std::map<std::string, int64_t>& Converter::converted() const {
+  return impl_->converted;
+}
+const std::map<std::string, int64_t>& Converter::ignored() const {
+  return impl_->ignored;
+}
+
+std::vector<Message> Converter::convert(const std::string& prefixed, const void* data, size_t size,
+                                        int64_t receive_utime) {
+  namespace ch = channels;
+  Impl& d = *impl_;
+  std::vector<Message> out;
+  const std::string& prefix = d.options.channel_prefix;
+  if (prefixed.compare(0, prefix.size(), prefix) != 0) {
+    Impl::countIn(&d.ignored, printable(prefixed, 80));
+    return out;
+  }
+  const std::string channel = prefixed.substr(prefix.size());
+  const auto raw = [&](const char* topic, const auto& m) {
+    out.push_back(d.message(topic, receive_utime, m.utime, toJson(m)));
+  };
+  if (channel == ch::kStereoFrame || channel == ch::kStereoPreview) {
+    ptzstereo::stereo_frame_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    d.frame(channel, m, receive_utime, channel == ch::kStereoPreview, &out);
+  } else if (channel == ch::kPtzState) {
+    ptzstereo::ptz_state_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/ptz_state", m);
+    const double pan_tilt[2][2] = {{m.left.pan_rad, m.left.tilt_rad},
+                                   {m.right.pan_rad, m.right.tilt_rad}};
+    out.push_back(d.message("/tf", receive_utime, m.utime, d.transforms(m.utime, pan_tilt)));
+  } else if (channel == ch::kPtzSetpoint) {
+    ptzstereo::ptz_setpoint_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/ptz_setpoint", m);
+  } else if (channel == ch::kControlState) {
+    ptzstereo::control_state_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/control_state", m);
+  } else if (channel == ch::kObjectDetections) {
+    ptzstereo::object_detections_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/object_detections", m);
+    d.detections(m, receive_utime, &out);
+  } else if (channel == ch::kObjectPose) {
+    ptzstereo::object_pose_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/object_pose", m);
+  } else if (channel == ch::kObjectTracks) {
+    ptzstereo::object_tracks_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/object_tracks", m);
+    out.push_back(d.message("/objects", receive_utime, m.utime, d.trackScene(m)));
+  } else if (channel == ch::kSimTruth) {
+    ptzstereo::sim_truth_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/sim_truth", m);
+    out.push_back(d.message("/truth", receive_utime, m.utime, d.truthScene(m)));
+  } else if (channel == ch::kTargetSelect) {
+    ptzstereo::target_select_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    raw("/target_select", m);
+  } else if (channel == ch::kPointCloud || channel == ch::kPointCloudPreview) {
+    ptzstereo::point_cloud_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    const bool preview = channel == ch::kPointCloudPreview;
+    if (!preview && d.cloud_schedule.enabled() && !d.cloud_schedule.take(m.utime)) return out;
+    json j;
+    if (!d.cloud(m, &j)) {
+      d.countDrop(channel, "inconsistent cloud");
+      return out;
+    }
+    out.push_back(d.message(preview ? "/cloud_preview" : "/cloud", receive_utime, m.utime, j));
+  } else if (channel.rfind(ch::kProcessStatusPrefix, 0) == 0) {
+    ptzstereo::process_status_t m;
+    if (!d.decode(channel, data, size, &m)) return out;
+    d.status(channel, m, receive_utime, &out);
+  } else {
+    Impl::countIn(&d.ignored, printable(channel, 80));
+    return out;
+  }
+  if (!out.empty()) Impl::countIn(&d.converted, printable(channel, 80));
+  return out;
+}
+
+}  // namespace ptz::foxglove

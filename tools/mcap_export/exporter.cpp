@@ -1,0 +1,128 @@
+#include "tools/mcap_export/exporter.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+
+#include "common/message_check.hpp"
+#include "common/transport.hpp"
+#include "tools/foxglove/lcm_json.hpp"
+
+namespace ptz::tools {
+namespace {
+
+int64_t toNs(int64_t utime) {
+  int64_t ns;
+  return __builtin_mul_overflow(std::max<int64_t>(utime, 0), 1000, &ns) ? INT64_MAX : ns;
+}
+
+}  // namespace
+
+McapExporter::McapExporter(const std::string& path, StereoRig rig, const ExportOptions& options)
+    : converter_(std::move(rig), options.convert),
+      writer_(path, options.writer),
+      metrics_(options.target_class, options.settle_s),
+      prefix_(options.convert.channel_prefix) {}
+
+McapExporter::~McapExporter() = default;
+
+void McapExporter::write(const std::string& topic, const std::string& schema_name,
+                         const std::string& schema, int64_t log_time_ns, int64_t publish_time_ns,
+                         const std::string& json) {
+  auto channel = channel_ids_.find(topic);
+  if (channel == channel_ids_.end()) {
+    auto schema_id = schema_ids_.find(schema_name);
+    if (schema_id == schema_ids_.end()) {
+      schema_id =
+          schema_ids_.emplace(schema_name, writer_.addSchema(schema_name, "jsonschema", schema))
+              .first;
+    }
+    channel =
+        channel_ids_.emplace(topic, writer_.addChannel(schema_id->second, topic, "json")).first;
+  }
+  writer_.write(channel->second, static_cast<uint64_t>(log_time_ns),
+                static_cast<uint64_t>(publish_time_ns), json.data(), json.size());
+  ++written_[topic];
+}
+
+void McapExporter::add(const std::string& channel, const void* data, size_t size,
+                       int64_t receive_utime) {
+  ++messages_in_;
+  last_receive_utime_ = std::max(last_receive_utime_, receive_utime);
+  for (const foxglove::Message& m : converter_.convert(channel, data, size, receive_utime)) {
+    const foxglove::Topic& t = converter_.topics().at(static_cast<size_t>(m.topic));
+    write(t.name, t.schema_name, t.schema_json, m.log_time_ns, m.publish_time_ns, m.json);
+  }
+  const std::string& prefix = prefix_;
+  if (channel.compare(0, prefix.size(), prefix) == 0) {
+    feedMetrics(channel.substr(prefix.size()), data, size, receive_utime);
+  }
+}
+
+void McapExporter::feedMetrics(const std::string& channel, const void* data, size_t size,
+                               int64_t receive_utime) {
+  namespace ch = channels;
+  std::string why;
+  if (channel == ch::kStereoFrame) {
+    ptzstereo::stereo_frame_t m;
+    if (!decodeChecked(data, size, &m, &why)) return;
+    metrics_.onFrame(m);
+    frame_receive_utime_.emplace(m.seq, receive_utime);
+  } else if (channel == ch::kSimTruth) {
+    ptzstereo::sim_truth_t m;
+    if (decodeChecked(data, size, &m, &why)) metrics_.onTruth(m);
+  } else if (channel == ch::kObjectPose) {
+    ptzstereo::object_pose_t m;
+    if (decodeChecked(data, size, &m, &why)) metrics_.onPose(m);
+  } else if (channel == ch::kPtzSetpoint) {
+    ptzstereo::ptz_setpoint_t m;
+    if (decodeChecked(data, size, &m, &why)) metrics_.onSetpoint(m);
+  } else if (channel == ch::kControlState) {
+    ptzstereo::control_state_t m;
+    if (decodeChecked(data, size, &m, &why)) metrics_.onControlState(m);
+  } else if (channel.rfind(ch::kProcessStatusPrefix, 0) == 0) {
+    ptzstereo::process_status_t m;
+    if (decodeChecked(data, size, &m, &why)) metrics_.onStatus(m);
+  }
+}
+
+void McapExporter::finish(const std::map<std::string, std::string>& metadata) {
+  using nlohmann::json;
+  // Per frame: the tracked true object's offset from both image centres (SIM_TRUTH runs only),
+  // at the time the frame arrived, so it lines up with the images on the timeline.
+  const json centering_sample = {{"frame_seq", 0},    {"left_x_px", 0.5},  {"left_y_px", 0.5},
+                                 {"right_x_px", 0.5}, {"right_y_px", 0.5}, {"left_px", 0.5},
+                                 {"right_px", 0.5}};
+  const std::string centering_schema =
+      foxglove::schemaOf(centering_sample, "ptzstereo.run_centering").dump();
+  const auto frames = metrics_.frames();
+  for (const auto& [seq, offsets] : metrics_.centeringByFrame()) {
+    if (offsets.size() != 4) continue;
+    const auto received = frame_receive_utime_.find(seq);
+    const auto frame = frames.find(seq);
+    const int64_t capture_utime = frame == frames.end() ? 0 : frame->second.utime;
+    const int64_t log_utime =
+        received == frame_receive_utime_.end() ? capture_utime : received->second;
+    const json j = {{"frame_seq", seq},
+                    {"left_x_px", offsets[0]},
+                    {"left_y_px", offsets[1]},
+                    {"right_x_px", offsets[2]},
+                    {"right_y_px", offsets[3]},
+                    {"left_px", std::hypot(offsets[0], offsets[1])},
+                    {"right_px", std::hypot(offsets[2], offsets[3])}};
+    write("/run/centering", "ptzstereo.run_centering", centering_schema, toNs(log_utime),
+          toNs(capture_utime), j.dump());
+  }
+  // The whole run's numbers, once, at the end of the run.
+  const json summary = json::parse(metrics_.summary().toJson());
+  write("/run/summary", "ptzstereo.run_summary",
+        foxglove::schemaOf(summary, "ptzstereo.run_summary").dump(), toNs(last_receive_utime_),
+        toNs(last_receive_utime_), summary.dump());
+  std::map<std::string, std::string> run;
+  for (auto it = summary.begin(); it != summary.end(); ++it) run[it.key()] = it.value().dump();
+  writer_.addMetadata("run_summary", run);
+  writer_.addMetadata("source", metadata);
+  writer_.close();
+}
+
+}  // namespace ptz::tools
