@@ -1,13 +1,15 @@
-// Windows for speed (perception/detect/windows.hpp): ptz-detect's detection per stereo frame
-// (JPEG decoding of what is scanned, detection, association, tracking) with windows around the
-// tracked ball and without, on rendered JPEG frames of the default scenario at VGA and 1080p,
-// the cameras following the ball. One core; median and p99, the windowed frames' and full scans'
-// own medians, and the share of frames scanned whole.
+// Windows for speed (perception/detect/windows.hpp, pyramid.hpp): ptz-detect's detection per
+// stereo frame (decoding of what is scanned, detection, association, tracking) on rendered frames
+// of the default scenario at VGA and 1080p, the cameras following the ball: full scans at full
+// resolution against pyramid full scans (JPEG and raw), and windows around the tracked ball with
+// either. One core, every frame through every config in turn; median and p99 of decode + detect
+// and of the whole, the windowed frames' and full scans' own, the share of frames scanned whole.
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -26,23 +28,6 @@ using ptz::bench::report;
 namespace perception = ptz::perception;
 
 namespace {
-
-// The default rig at another image size: the same horizontal field of view.
-ptz::StereoRig rigAt(int width, int height) {
-  ptz::StereoRig rig = ptz::StereoRig::makeDefault();
-  const double s = width / 640.0;
-  for (ptz::CameraSpec* c : {&rig.left, &rig.right}) {
-    for (auto& z : c->zoom_table) {
-      z.intrinsics.fx *= s;
-      z.intrinsics.fy *= s;
-      z.intrinsics.cx = (z.intrinsics.cx + 0.5) * s - 0.5;
-      z.intrinsics.cy = (z.intrinsics.cy + 0.5) * s - 0.5 + (height - 480 * s) / 2;
-    }
-    c->width = width;
-    c->height = height;
-  }
-  return rig;
-}
 
 struct Frame {
   std::vector<uint8_t> left, right;
@@ -83,66 +68,139 @@ std::vector<Frame> render(const ptz::StereoRig& rig, const ptz::sim::Scene& scen
   return frames;
 }
 
-perception::DecodeParts decoder(const std::vector<uint8_t>& jpeg, cv::Size size) {
-  return [&jpeg, size](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts,
-                       std::string* why) {
-    if (rects.size() == 1 && rects[0] == cv::Rect({0, 0}, size)) {
-      parts->assign(1, cv::imdecode(jpeg, cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION));
-      return !(*parts)[0].empty();
-    }
-    return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height, rects,
-                                         parts, why);
-  };
+// A JPEG as ptz-detect reads it: the whole by cv::imdecode, parts by decodeJpegWindows, the
+// pyramid's level by decodeJpegReduced.
+perception::ImagePixels fromJpeg(const std::vector<uint8_t>& jpeg, cv::Size size) {
+  return {[&jpeg, size](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts,
+                        std::string* why) {
+            if (rects.size() == 1 && rects[0] == cv::Rect({0, 0}, size)) {
+              parts->assign(1,
+                            cv::imdecode(jpeg, cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION));
+              return !(*parts)[0].empty();
+            }
+            return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height,
+                                                 rects, parts, why);
+          },
+          [&jpeg, size](int scale, cv::Mat* reduced, std::string* why) {
+            return perception::decodeJpegReduced(jpeg.data(), jpeg.size(), size.width, size.height,
+                                                 scale, reduced, why);
+          }};
+}
+
+// Raw BGR pixels (ptz-detect's raw frames): parts are views, the level cv::resize INTER_AREA.
+perception::ImagePixels fromRaw(const cv::Mat& image) {
+  return perception::DecodeParts(
+      [&image](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts, std::string*) {
+        parts->clear();
+        for (const auto& r : rects) parts->push_back(image(r));
+        return true;
+      });
+}
+
+// One way of scanning, with its own scanner and tracker: the frames go through every config in
+// turn, so a busy machine slows them alike.
+struct Config {
+  std::string name;
+  perception::WindowParams params;
+  bool raw = false;
+  std::unique_ptr<perception::WindowScanner> scanner;
+  perception::Tracker tracker;
+  std::vector<double> detect_ms, all_ms, windowed_ms, full_ms;
+  int with_target = 0, pyramid = 0;
+};
+
+std::unique_ptr<Config> config(const std::string& name, bool windows, int full_scan_max_width_px,
+                               bool raw) {
+  auto c = std::make_unique<Config>();
+  c->name = name;
+  c->params.enabled = windows;
+  c->params.full_scan_max_width_px = full_scan_max_width_px;
+  c->raw = raw;
+  return c;
+}
+
+bool step(Config* c, const ptz::StereoRig& rig, const Frame& f, const cv::Mat& left_raw,
+          const cv::Mat& right_raw, const perception::Detector& detector,
+          const std::vector<std::string>& names) {
+  const cv::Size size(rig.left.width, rig.left.height);
+  if (!c->scanner) {
+    c->scanner =
+        std::make_unique<perception::WindowScanner>(c->params, size, detector.exactMarginPx());
+  }
+  const auto t0 = Clock::now();
+  const ptz::CameraView lv = rig.view(ptz::Side::kLeft, f.left_pose);
+  const ptz::CameraView rv = rig.view(ptz::Side::kRight, f.right_pose);
+  perception::ScanPlan plan = c->scanner->plan(c->tracker.tracks(), f.t_s, lv, rv);
+  std::vector<perception::Region> lr, rr;
+  std::string why;
+  const bool ok = c->raw ? c->scanner->detect(detector, &plan, fromRaw(left_raw),
+                                              fromRaw(right_raw), &lr, &rr, &why)
+                         : c->scanner->detect(detector, &plan, fromJpeg(f.left, size),
+                                              fromJpeg(f.right, size), &lr, &rr, &why);
+  if (!ok) {
+    std::printf("%s: decode failed: %s\n", c->name.c_str(), why.c_str());
+    return false;
+  }
+  const double detect_ms = ms(Clock::now() - t0);
+  const auto objects = perception::associate(lr, rr, lv, rv, {});
+  c->tracker.update(f.t_s, perception::trackMeasurements(objects, lr, rr, lv, rv, names, 1.3,
+                                                         c->tracker.tracks(), f.t_s));
+  const double t = ms(Clock::now() - t0);
+  c->detect_ms.push_back(detect_ms);
+  c->all_ms.push_back(t);
+  (plan.full ? c->full_ms : c->windowed_ms).push_back(t);
+  c->pyramid += plan.pyramid ? 1 : 0;
+  for (const auto& o : objects) c->with_target += o.class_index == 0 ? 1 : 0;
+  return true;
+}
+
+void summary(const char* size_name, const Config& c) {
+  const std::string what = std::string(size_name) + ", " + c.name;
+  std::printf("%s\n", what.c_str());
+  report("  decode + detect", c.detect_ms);
+  report("  decode + detect + track", c.all_ms);
+  if (c.params.enabled) {
+    if (!c.windowed_ms.empty()) report("  of which windowed frames", c.windowed_ms);
+    if (!c.full_ms.empty()) report("  of which full scans", c.full_ms);
+  }
+  std::printf(
+      "  frames scanned whole %zu of %zu (%d through the pyramid); ball triangulated in %d\n",
+      c.full_ms.size(), c.all_ms.size(), c.pyramid, c.with_target);
+  std::printf("  ");
+  for (const auto& [k, n] : c.scanner->counts()) {
+    const bool shown =
+        k.rfind("full_scans_", 0) == 0 || k.rfind("pyramid_", 0) == 0 || k == "windows_grown";
+    if (n > 0 && shown) std::printf(" %s %lld", k.c_str(), static_cast<long long>(n));
+  }
+  std::printf("\n");
 }
 
 void run(const char* name, const ptz::StereoRig& rig, const std::vector<Frame>& frames,
-         const perception::Detector& detector, bool windows) {
-  perception::WindowParams wp;
-  wp.enabled = windows;
-  const cv::Size size(rig.left.width, rig.left.height);
-  perception::WindowScanner scanner(wp, size, detector.exactMarginPx());
-  perception::Tracker tracker;
+         const perception::Detector& detector) {
+  // The pyramid at VGA (to 320 px, by 2) only to compare: its default (960) leaves VGA alone.
+  const int pyramid_px = rig.left.width > 960 ? 960 : 320;
+  std::vector<std::unique_ptr<Config>> configs;
+  configs.push_back(config("full scans, full resolution, JPEG", false, 0, false));
+  configs.push_back(config("full scans, pyramid " + std::to_string(pyramid_px) + " px, JPEG", false,
+                           pyramid_px, false));
+  configs.push_back(config("full scans, full resolution, raw", false, 0, true));
+  configs.push_back(config("full scans, pyramid " + std::to_string(pyramid_px) + " px, raw", false,
+                           pyramid_px, true));
+  configs.push_back(config("windows on, full scans at full resolution, JPEG", true, 0, false));
+  configs.push_back(
+      config("windows on, full scans pyramid " + std::to_string(pyramid_px) + " px, JPEG", true,
+             pyramid_px, false));
   std::vector<std::string> names;
   for (const auto& c : detector.params().classes) names.push_back(c.name);
-  std::vector<double> all_ms, windowed_ms, full_ms;
-  int with_target = 0;
   for (const Frame& f : frames) {
-    const auto t0 = Clock::now();
-    const ptz::CameraView lv = rig.view(ptz::Side::kLeft, f.left_pose);
-    const ptz::CameraView rv = rig.view(ptz::Side::kRight, f.right_pose);
-    perception::ScanPlan plan = scanner.plan(tracker.tracks(), f.t_s, lv, rv);
-    std::vector<perception::Region> lr, rr;
-    std::string why;
-    if (!scanner.detect(detector, &plan, decoder(f.left, size), decoder(f.right, size), &lr, &rr,
-                        &why)) {
-      std::printf("decode failed: %s\n", why.c_str());
-      return;
+    // Raw frames as the camera would send them (decoded outside the timing).
+    const cv::Mat left_raw = cv::imdecode(f.left, cv::IMREAD_COLOR);
+    const cv::Mat right_raw = cv::imdecode(f.right, cv::IMREAD_COLOR);
+    for (auto& c : configs) {
+      if (!step(c.get(), rig, f, left_raw, right_raw, detector, names)) return;
     }
-    const auto objects = perception::associate(lr, rr, lv, rv, {});
-    tracker.update(f.t_s, perception::trackMeasurements(objects, lr, rr, lv, rv, names, 1.3,
-                                                        tracker.tracks(), f.t_s));
-    const double t = ms(Clock::now() - t0);
-    all_ms.push_back(t);
-    (plan.full ? full_ms : windowed_ms).push_back(t);
-    for (const auto& o : objects) with_target += o.class_index == 0 ? 1 : 0;
   }
-  const std::string what = std::string(name) + (windows ? ", windows on" : ", windows off");
-  report((what + ": decode + detect + track").c_str(), all_ms);
-  if (windows) {
-    if (!windowed_ms.empty()) report("  of which windowed frames", windowed_ms);
-    if (!full_ms.empty()) report("  of which full scans", full_ms);
-  }
-  std::printf("  frames scanned whole %zu of %zu; ball triangulated in %d\n", full_ms.size(),
-              all_ms.size(), with_target);
-  if (windows) {
-    std::printf("  ");
-    for (const auto& [k, n] : scanner.counts()) {
-      if (n > 0 && k.rfind("full_scans_", 0) == 0)
-        std::printf(" %s %lld", k.c_str(), static_cast<long long>(n));
-    }
-    std::printf(" windows_grown %lld\n",
-                static_cast<long long>(scanner.counts().at("windows_grown")));
-  }
+  for (const auto& c : configs) summary(name, *c);
 }
 
 }  // namespace
@@ -157,10 +215,9 @@ int main() {
       perception::DetectorParams::fromConfig(det_cfg["classes"], "detect_default.yaml"));
   for (const auto& [name, w, h] : {std::tuple<const char*, int, int>{"VGA", 640, 480},
                                    std::tuple<const char*, int, int>{"1080p", 1920, 1080}}) {
-    const ptz::StereoRig rig = rigAt(w, h);
+    const ptz::StereoRig rig = ptz::StereoRig::makeDefault().atSize(w, h);
     const std::vector<Frame> frames = render(rig, scene);
-    run(name, rig, frames, detector, false);
-    run(name, rig, frames, detector, true);
+    run(name, rig, frames, detector);
   }
   return 0;
 }

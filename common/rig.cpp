@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <map>
+#include <tuple>
 
 #include "common/config.hpp"
 
@@ -204,9 +207,44 @@ void StereoRig::save(const std::string& path,
   fs << "R" << R << "T" << T;
 }
 
+void declareRigParams(Params& params) {
+  params.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  params.add("image_size", "",
+             "the cameras read out at this size: vga, 720p, 1080p or WIDTHxHEIGHT (the field of "
+             "view kept); empty: the rig file's size");
+}
+
+bool parseImageSize(const std::string& text, int* width_px, int* height_px, std::string* why) {
+  static const std::map<std::string, std::pair<int, int>> named = {
+      {"vga", {640, 480}}, {"720p", {1280, 720}}, {"1080p", {1920, 1080}}};
+  if (const auto it = named.find(text); it != named.end()) {
+    std::tie(*width_px, *height_px) = it->second;
+    return true;
+  }
+  int w = 0, h = 0, end = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%n", &w, &h, &end) != 2 ||
+      end != static_cast<int>(text.size())) {
+    *why = "must be vga, 720p, 1080p or WIDTHxHEIGHT";
+    return false;
+  }
+  if (w < 16 || h < 16 || w > 4096 || h > 4096) {
+    *why = "each side must be 16 .. 4096 px";
+    return false;
+  }
+  *width_px = w;
+  *height_px = h;
+  return true;
+}
+
 StereoRig rigFromParams(const Params& params) {
   const std::string path = params.getExistingPath("rig_file");
-  return path.empty() ? StereoRig::makeDefault() : StereoRig::load(path);
+  const StereoRig rig = path.empty() ? StereoRig::makeDefault() : StereoRig::load(path);
+  const std::string size = params.getString("image_size");
+  if (size.empty()) return rig;
+  int width_px = 0, height_px = 0;
+  std::string why;
+  if (!parseImageSize(size, &width_px, &height_px, &why)) throw params.invalid("image_size", why);
+  return rig.atSize(width_px, height_px);
 }
 
 StereoRig StereoRig::makeDefault() {
@@ -231,6 +269,23 @@ StereoRig StereoRig::makeDefault() {
   rig.home.R = rotationY(-0.01) * rotationX(0.004) *
                Eigen::AngleAxisd(0.003, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   rig.home.T = rig.home.R * Eigen::Vector3d(-0.30, 0.002, 0.001);
+  return rig;
+}
+
+StereoRig StereoRig::atSize(int width_px, int height_px) const {
+  StereoRig rig = *this;
+  for (CameraSpec* c : {&rig.left, &rig.right}) {
+    const double s = static_cast<double>(width_px) / c->width;
+    const double extra_rows_px = height_px - c->height * s;
+    for (ZoomEntry& z : c->zoom_table) {
+      z.intrinsics.fx *= s;
+      z.intrinsics.fy *= s;
+      z.intrinsics.cx = (z.intrinsics.cx + 0.5) * s - 0.5;
+      z.intrinsics.cy = (z.intrinsics.cy + 0.5) * s - 0.5 + extra_rows_px / 2;
+    }
+    c->width = width_px;
+    c->height = height_px;
+  }
   return rig;
 }
 

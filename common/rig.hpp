@@ -101,11 +101,21 @@ class StereoRig {
             const std::function<void(cv::FileStorage&)>& extra_fields = {}) const;
   // A plausible PTZ rig: VGA, 1x-10x zoom, 0.3 m baseline, mild distortion.
   static StereoRig makeDefault();
+  // The same cameras read out at another image size, as a camera's own scaler does: the
+  // horizontal field of view kept, pixel centres mapped (x + 0.5) * s - 0.5, another aspect
+  // ratio cropped or extended about the principal point's row. Distortion (normalised) is kept.
+  StereoRig atSize(int width_px, int height_px) const;
 };
 
 class Params;
-// The rig of the parameter rig_file (declared by the caller), or the default rig when empty.
+// Declares rig_file and image_size, the parameters rigFromParams reads.
+void declareRigParams(Params& params);
+// The rig of the parameter rig_file (the built-in default rig when empty), read out at
+// image_size when that is set ("vga", "720p", "1080p" or WIDTHxHEIGHT; empty: the file's size).
 StereoRig rigFromParams(const Params& params);
+// "vga" 640x480, "720p" 1280x720, "1080p" 1920x1080, or "WIDTHxHEIGHT" (16..4096 each); false
+// with the reason otherwise.
+bool parseImageSize(const std::string& text, int* width_px, int* height_px, std::string* why);
 
 Eigen::Matrix3d rotationY(double angle_rad);
 Eigen::Matrix3d rotationX(double angle_rad);

@@ -6,7 +6,9 @@
 // (decodeJpegWindow, libjpeg-turbo's crop and skip) of the whole image and of a part: it refuses
 // a header that does not say the message's size in colour, and otherwise gives the part's size in
 // BGR. (Its pixels equal a full decode's for valid JPEGs, test_windows.cpp; of damaged data
-// cv::imdecode may give zeros where libjpeg fills in, so that is no property here.)
+// cv::imdecode may give zeros where libjpeg fills in, so that is no property here.) The pyramid's
+// reduced decode (decodeJpegReduced) by 2, 4, 8: the same refusals, the reduced size, the same
+// pixels when decoded twice; any other scale refused.
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -80,6 +82,31 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       FUZZ_CHECK(window.size() == r.size() && window.type() == CV_8UC3,
                  "a window of " + std::to_string(window.cols) + "x" + std::to_string(window.rows) +
                      " for " + std::to_string(r.width) + "x" + std::to_string(r.height));
+    }
+    // The pyramid's reduced decode (libjpeg's DCT scaling): the same header rule, the reduced
+    // size in BGR, the same pixels twice; other scales refused.
+    for (int scale : {2, 4, 8, 0, 3}) {
+      cv::Mat reduced, again;
+      std::string reduced_why;
+      const bool ok = ptz::perception::decodeJpegReduced(
+          msg.data.data(), msg.data.size(), msg.width, msg.height, scale, &reduced, &reduced_why);
+      const bool valid_scale = scale == 2 || scale == 4 || scale == 8;
+      FUZZ_CHECK(ok || !reduced_why.empty(), "a refused reduced decode without a reason");
+      FUZZ_CHECK(!ok || (valid_scale && colour && same_size),
+                 "decodeJpegReduced took scale " + std::to_string(scale) +
+                     " or a header that is not the message's in colour");
+      if (!ok) {
+        FUZZ_CHECK(reduced.empty(), "a refused reduced decode wrote its output");
+        continue;
+      }
+      FUZZ_CHECK(reduced.cols == (msg.width + scale - 1) / scale &&
+                     reduced.rows == (msg.height + scale - 1) / scale && reduced.type() == CV_8UC3,
+                 "reduced by " + std::to_string(scale) + " to " + std::to_string(reduced.cols) +
+                     "x" + std::to_string(reduced.rows));
+      FUZZ_CHECK(ptz::perception::decodeJpegReduced(msg.data.data(), msg.data.size(), msg.width,
+                                                    msg.height, scale, &again, &reduced_why) &&
+                     cv::norm(reduced, again, cv::NORM_INF) == 0,
+                 "two reduced decodes of the same bytes differ");
     }
   }
   if (!image_ok) {

@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -42,8 +43,26 @@ namespace visca_ip = ptz::driver::visca_ip;
 namespace pelco_d = ptz::driver::pelco_d;
 
 std::string g_out;
+// Every message seed, as a record of fuzz_foxglove_convert's input: [channel byte][u16 LE][bytes].
+Bytes g_convert_records;
+
+void addConvertRecord(const std::string& target, const Bytes& bytes) {
+  // The channel bytes of fuzz_foxglove_convert.cpp's table.
+  static const std::map<std::string, uint8_t> channel_byte = {
+      {"fuzz_stereo_frame", 0},  {"fuzz_ptz_state", 2},         {"fuzz_ptz_setpoint", 3},
+      {"fuzz_control_state", 4}, {"fuzz_object_detections", 5}, {"fuzz_object_pose", 6},
+      {"fuzz_object_tracks", 7}, {"fuzz_sim_truth", 8},         {"fuzz_target_select", 9},
+      {"fuzz_point_cloud", 10},  {"fuzz_process_status", 13}};
+  const auto it = channel_byte.find(target);
+  if (it == channel_byte.end() || bytes.size() > 0xFFFF) return;
+  g_convert_records.push_back(it->second);
+  g_convert_records.push_back(static_cast<uint8_t>(bytes.size() & 0xFF));
+  g_convert_records.push_back(static_cast<uint8_t>(bytes.size() >> 8));
+  g_convert_records.insert(g_convert_records.end(), bytes.begin(), bytes.end());
+}
 
 void write(const std::string& target, const std::string& name, const Bytes& bytes) {
+  addConvertRecord(target, bytes);
   const std::string dir = g_out + "/" + target;
   ::mkdir(dir.c_str(), 0755);
   std::ofstream f(dir + "/" + name, std::ios::binary);
@@ -543,6 +562,29 @@ void logs() {
   std::remove(scratch.c_str());
 }
 
+// ptz-foxglove-bridge's client messages (NUL between messages) and the converter's runs.
+void foxglove() {
+  const std::string ops[] = {
+      R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":3},{"id":2,"channelId":5}]})",
+      R"({"op":"unsubscribe","subscriptionIds":[1]})",
+      R"({"op":"subscribe","subscriptions":[{"id":4,"channelId":99},{"id":"x","channelId":-1}]})",
+      R"({"op":"advertise","channels":[]})",
+      R"({"op":"subscribe","subscriptions":[{"id":1,"channelId":2,"extra":"ÿ"}]})",
+      "[1,2,3]",
+      "{\"op\":\"\xff\xfe\"}",
+  };
+  std::string all;
+  for (const std::string& op : ops) all += op + std::string(1, '\0');
+  write("fuzz_foxglove_client", "every_op", all);
+  write("fuzz_foxglove_client", "subscribe_then_unsubscribe", ops[0] + '\0' + ops[1]);
+  write("fuzz_foxglove_client", "binary_publish", std::string("\x01\x07\0\0\0abc", 8));
+  const Bytes records = g_convert_records;
+  for (uint8_t options : {0, 1 | 2 | 4, 8}) {
+    write("fuzz_foxglove_convert", "every_message_options_" + std::to_string(options),
+          concat({{options}, records}));
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -558,5 +600,6 @@ int main(int argc, char** argv) {
   pelco_bytes();
   files(argv[1]);
   logs();
+  foxglove();
   return 0;
 }

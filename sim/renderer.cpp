@@ -16,6 +16,17 @@ constexpr int kTextureSize = 1024;  // a power of two: wrap-around by masking
 // Undistortion solved every 8 px and interpolated between: within 0.01 px of solving every
 // pixel for the default lens, at a sixty-fourth of the cost (zoom changes it every frame).
 constexpr int kGridStep = 8;
+constexpr int kBandRows = 32;  // rows per band of the parallel render (and of the noise)
+constexpr size_t kRayGrids = 4;
+
+// First row of band `band` of `bands` over `rows` rows.
+int bandRow(int band, int bands, int rows) {
+  return static_cast<int>(static_cast<int64_t>(band) * rows / bands);
+}
+
+int autoBands(int rows) {
+  return std::max(1, (rows + kBandRows - 1) / kBandRows);
+}
 
 // Low-saturation multi-scale noise with a few darker patches: texture for block matching that
 // does not look like any object colour.
@@ -115,56 +126,246 @@ Renderer::Renderer(const Scene& scene) : scene_(scene) {
   cv::vconcat(backdrop, floor, atlas_);
 }
 
-const cv::Mat& Renderer::rays(const CameraView& view) {
-  for (auto& c : caches_) {
-    if (c.width == view.width && c.height == view.height &&
-        sameIntrinsics(c.intrinsics, view.intrinsics)) {
-      return c.rays;
+const Renderer::RayGrid& Renderer::rayGrid(const CameraView& view) {
+  for (const RayGrid& g : grids_) {
+    if (g.width == view.width && g.height == view.height &&
+        sameIntrinsics(g.intrinsics, view.intrinsics)) {
+      return g;
     }
   }
+  // A new zoom every frame while zooming: the oldest entry's memory is reused.
+  if (grids_.size() < kRayGrids) {
+    grids_.emplace_back();
+  } else {
+    std::rotate(grids_.begin(), grids_.begin() + 1, grids_.end());
+  }
+  RayGrid& grid = grids_.back();
+  grid.width = 0;  // not valid until solved
   const Intrinsics& k = view.intrinsics;
   const int gw = view.width / kGridStep + 2, gh = view.height / kGridStep + 2;
-  std::vector<cv::Point2f> grid;
-  grid.reserve(static_cast<size_t>(gw * gh));
+  std::vector<cv::Point2f> distorted;
+  distorted.reserve(static_cast<size_t>(gw * gh));
   for (int j = 0; j < gh; ++j) {
-    for (int i = 0; i < gw; ++i) grid.emplace_back(i * kGridStep, j * kGridStep);
+    for (int i = 0; i < gw; ++i) distorted.emplace_back(i * kGridStep, j * kGridStep);
   }
   const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
-  std::vector<cv::Point2f> undistorted;
-  cv::undistortPoints(grid, undistorted, K, cv::Mat(k.distortion, true), cv::noArray(),
-                      cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
-  RayCache cache{view.width, view.height, k, cv::Mat(view.height, view.width, CV_32FC2)};
-  for (int v = 0; v < view.height; ++v) {
+  const cv::Mat distortion(k.distortion, true);
+  grid.points.resize(distorted.size());
+  // Each point is solved alone: rows of the grid on all threads give the same points.
+  cv::parallel_for_(cv::Range(0, gh), [&](const cv::Range& range) {
+    const auto first = static_cast<ptrdiff_t>(range.start) * gw;
+    const auto last = static_cast<ptrdiff_t>(range.end) * gw;
+    const std::vector<cv::Point2f> in(distorted.begin() + first, distorted.begin() + last);
+    std::vector<cv::Point2f> out;
+    cv::undistortPoints(
+        in, out, K, distortion, cv::noArray(), cv::noArray(),
+        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-12));
+    std::copy(out.begin(), out.end(), grid.points.begin() + first);
+  });
+  grid.columns = gw;
+  grid.intrinsics = k;
+  grid.height = view.height;
+  grid.width = view.width;
+  return grid;
+}
+
+Renderer::RayRows Renderer::interpolateRays(const RayGrid& grid, int row0, int row1,
+                                            RayScratch* scratch) {
+  const int width = grid.width, gw = grid.columns;
+  if (scratch->storage.rows < row1 - row0 || scratch->storage.cols != width) {
+    scratch->storage.create(std::max(row1 - row0, scratch->storage.rows), width, CV_32FC2);
+  }
+  scratch->rays = scratch->storage.rowRange(0, row1 - row0);
+  scratch->top.resize(static_cast<size_t>(width));
+  scratch->span.resize(static_cast<size_t>(width));
+  cv::Point2f* top = scratch->top.data();
+  cv::Point2f* span = scratch->span.data();
+  const cv::Point2f* g = grid.points.data();
+  // Bilinear between the grid's points: along the two grid rows once (top, bottom - top), then
+  // one multiply and one add per coordinate for each of the rows between them.
+  int row_j = -1;
+  for (int v = row0; v < row1; ++v) {
     const int j = v / kGridStep;
+    if (j != row_j) {
+      for (int u = 0; u < width; ++u) {
+        const int i = u / kGridStep;
+        const float fu = static_cast<float>(u - i * kGridStep) / kGridStep;
+        const cv::Point2f& a = g[j * gw + i];
+        const cv::Point2f& b = g[j * gw + i + 1];
+        const cv::Point2f& c = g[(j + 1) * gw + i];
+        const cv::Point2f& d = g[(j + 1) * gw + i + 1];
+        top[u] = a + fu * (b - a);
+        span[u] = (c + fu * (d - c)) - top[u];
+      }
+      row_j = j;
+    }
     const float fv = static_cast<float>(v - j * kGridStep) / kGridStep;
-    cv::Vec2f* row = cache.rays.ptr<cv::Vec2f>(v);
-    for (int u = 0; u < view.width; ++u) {
-      const int i = u / kGridStep;
-      const float fu = static_cast<float>(u - i * kGridStep) / kGridStep;
-      const cv::Point2f& a = undistorted[j * gw + i];
-      const cv::Point2f& b = undistorted[j * gw + i + 1];
-      const cv::Point2f& c = undistorted[(j + 1) * gw + i];
-      const cv::Point2f& d = undistorted[(j + 1) * gw + i + 1];
-      const cv::Point2f top = a + fu * (b - a), bottom = c + fu * (d - c);
-      const cv::Point2f p = top + fv * (bottom - top);
-      row[u] = cv::Vec2f(p.x, p.y);
+    cv::Vec2f* out = scratch->rays.ptr<cv::Vec2f>(v - row0);
+    for (int u = 0; u < width; ++u) {
+      out[u] = cv::Vec2f(top[u].x + fv * span[u].x, top[u].y + fv * span[u].y);
     }
   }
-  if (caches_.size() >= 4) caches_.erase(caches_.begin());
-  caches_.push_back(std::move(cache));
-  return caches_.back().rays;
+  return {&scratch->rays, row0};
+}
+
+const cv::Mat& Renderer::rays(const CameraView& view) {
+  RayScratch scratch;
+  interpolateRays(rayGrid(view), 0, view.height, &scratch);
+  scratch.rays.copyTo(rays_);
+  return rays_;
+}
+
+Renderer::BackgroundKey Renderer::backgroundKey(const CameraView& view) const {
+  return {view.width,
+          view.height,
+          view.intrinsics,
+          view.rotation_head_camera,
+          view.position_head_m,
+          scene_.backdrop_distance_m,
+          scene_.floor_height_m,
+          scene_.texture_m_per_texel,
+          scene_.chessboard};
+}
+
+bool Renderer::sameBackground(const BackgroundKey& a, const BackgroundKey& b) {
+  const Chessboard &ca = a.chessboard, &cb = b.chessboard;
+  const bool same_board =
+      ca.present == cb.present &&
+      (!ca.present ||
+       (ca.inner_cols == cb.inner_cols && ca.inner_rows == cb.inner_rows &&
+        ca.square_m == cb.square_m && ca.rotation_head_board == cb.rotation_head_board &&
+        ca.centre_head_m == cb.centre_head_m));
+  return a.width == b.width && a.height == b.height && sameIntrinsics(a.intrinsics, b.intrinsics) &&
+         a.rotation_head_camera == b.rotation_head_camera &&
+         a.position_head_m == b.position_head_m && a.backdrop_distance_m == b.backdrop_distance_m &&
+         a.floor_height_m == b.floor_height_m && a.texture_m_per_texel == b.texture_m_per_texel &&
+         same_board;
 }
 
 void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
                       std::vector<double>* visible_fraction) {
-  const cv::Mat& ray_map = rays(view);
-  // Background: per pixel, where its ray meets the floor or the backdrop, as fixed-point
-  // coordinates into the texture atlas (OpenCV's remap format: integer texel plus a 1/32 texel
-  // fraction); cv::remap then samples it bilinearly, vectorised.
-  map_xy_.create(view.height, view.width, CV_16SC2);
-  map_frac_.create(view.height, view.width, CV_16UC1);
-  depth_.create(view.height, view.width, CV_32F);
+  // Solved before the bands, which interpolate the rays they need.
+  const RayGrid& grid = rayGrid(view);
+  const int rows = view.height, cols = view.width;
+  const int bands = std::clamp(bands_ > 0 ? bands_ : autoBands(rows), 1, std::max(1, rows));
+  // The background (floor, backdrop, chessboard) does not move: while the view stays it is kept
+  // and copied. A view seen twice in a row is likely to stay (a still camera), so its
+  // background is kept for the frames after; a moving view's is drawn into the image directly.
+  const BackgroundKey key = backgroundKey(view);
+  const bool same_view = background_drawn_ && sameBackground(key, background_key_);
+  const bool draw_background = !(same_view && background_kept_);
+  const bool keep_background = draw_background && same_view;
+  cv::Rect board_rect;
+  if (draw_background) {
+    background_drawn_ = false;
+    map_xy_.create(rows, cols, CV_16SC2);
+    map_frac_.create(rows, cols, CV_16UC1);
+    if (keep_background) background_.create(rows, cols, CV_8UC3);
+    background_depth_.create(rows, cols, CV_32F);
+    const Chessboard& b = scene_.chessboard;
+    if (b.present) {
+      // The board with a white margin of one square around the (inner + 1) squares.
+      board_rect = boundingRect(
+          view, b.centre_head_m,
+          std::hypot((b.inner_cols + 3) * b.square_m / 2, (b.inner_rows + 3) * b.square_m / 2));
+    }
+  }
+  depth_.create(rows, cols, CV_32F);
+  owner_.create(rows, cols, CV_32S);
+  bgr->create(rows, cols, CV_8UC3);
+  cv::Mat* background_image = keep_background || !draw_background ? &background_ : bgr;
+  const size_t n = scene_.objects.size();
+  objects_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const SceneObject& object = scene_.objects[i];
+    ObjectFrame& o = objects_[i];
+    const Eigen::Vector3d centre = object.trajectory.position(t_s);
+    o.rect = boundingRect(view, centre, object.boundingRadius());
+    o.oc = view.position_head_m - centre;
+    o.box_to_head = object.rotationHeadObject(t_s);
+    o.oc_box = o.box_to_head.transpose() * o.oc;
+  }
+  // The rows any object may cover: a still view's bands need no rays outside them.
+  int object_row0 = rows, object_row1 = 0;
+  for (const ObjectFrame& o : objects_) {
+    if (o.rect.empty()) continue;
+    object_row0 = std::min(object_row0, o.rect.y);
+    object_row1 = std::max(object_row1, o.rect.y + o.rect.height);
+  }
+  // Per band, per object: footprint and shown pixels; summed in band order below.
+  band_counts_.assign(2 * n * static_cast<size_t>(bands), 0);
+  cv::parallel_for_(
+      cv::Range(0, bands),
+      [&](const cv::Range& range) {
+        for (int band = range.start; band < range.end; ++band) {
+          const int row0 = bandRow(band, bands, rows), row1 = bandRow(band + 1, bands, rows);
+          // The background needs its rows' rays (the chessboard also the rows above and below),
+          // the objects those of the rows they may cover.
+          const int ray0 = draw_background ? std::max(0, row0 - 1) : std::max(row0, object_row0);
+          const int ray1 = draw_background ? std::min(rows, row1 + 1) : std::min(row1, object_row1);
+          thread_local RayScratch scratch;
+          RayRows rays;
+          if (ray0 < ray1) rays = interpolateRays(grid, ray0, ray1, &scratch);
+          if (draw_background) {
+            drawBackground(view, rays, board_rect, row0, row1, background_image);
+          }
+          if (background_image != bgr) {
+            cv::Mat out = bgr->rowRange(row0, row1);
+            background_.rowRange(row0, row1).copyTo(out);
+          }
+          // Objects start from the background's depth and no owner, where they may draw.
+          const cv::Rect rows_rect(0, row0, cols, row1 - row0);
+          for (const ObjectFrame& o : objects_) {
+            const cv::Rect r = o.rect & rows_rect;
+            if (r.empty()) continue;
+            cv::Mat depth = depth_(r), owner = owner_(r);
+            background_depth_(r).copyTo(depth);
+            owner.setTo(-1);
+          }
+          int64_t* counts = &band_counts_[2 * n * static_cast<size_t>(band)];
+          for (size_t i = 0; i < n; ++i) {
+            counts[2 * i] = drawObject(scene_.objects[i], objects_[i], static_cast<int32_t>(i),
+                                       view, rays, row0, row1, bgr);
+          }
+          if (!visible_fraction) continue;
+          // Object i owns pixels inside its rectangle only.
+          for (size_t i = 0; i < n; ++i) {
+            const cv::Rect r = objects_[i].rect & rows_rect;
+            int64_t shown = 0;
+            for (int v = r.y; v < r.y + r.height; ++v) {
+              const int32_t* row = owner_.ptr<int32_t>(v);
+              for (int u = r.x; u < r.x + r.width; ++u) shown += row[u] == static_cast<int32_t>(i);
+            }
+            counts[2 * i + 1] = shown;
+          }
+        }
+      },
+      bands);
+  if (draw_background) {
+    background_key_ = key;
+    background_drawn_ = true;
+    background_kept_ = keep_background;
+  }
+  if (!visible_fraction) return;
+  std::vector<int64_t> footprint(n), shown(n);
+  for (int band = 0; band < bands; ++band) {
+    const int64_t* counts = &band_counts_[2 * n * static_cast<size_t>(band)];
+    for (size_t i = 0; i < n; ++i) {
+      footprint[i] += counts[2 * i];
+      shown[i] += counts[2 * i + 1];
+    }
+  }
+  visible_fraction->assign(n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    if (footprint[i] > 0) (*visible_fraction)[i] = static_cast<double>(shown[i]) / footprint[i];
+  }
+}
+
+void Renderer::drawBackground(const CameraView& view, const RayRows& rays,
+                              const cv::Rect& board_rect, int row0, int row1, cv::Mat* bgr) {
+  // Per pixel, where its ray meets the floor or the backdrop, as fixed-point coordinates into
+  // the texture atlas (OpenCV's remap format: integer texel plus a 1/32 texel fraction);
+  // cv::remap then samples it bilinearly, vectorised.
   const Eigen::Matrix3f R = view.rotation_head_camera.cast<float>();
   const Eigen::Vector3f C = view.position_head_m.cast<float>();
   const float zb = static_cast<float>(scene_.backdrop_distance_m);
@@ -181,21 +382,21 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
     return static_cast<int64_t>(m * scale + kOffset) & kWrapMask;
   };
   const short floor_row = kTextureSize + 1;  // the floor's half of the atlas
-  for (int v = 0; v < view.height; ++v) {
-    const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
+  for (int v = row0; v < row1; ++v) {
+    const cv::Vec2f* ray_row = rays.row(v);
     cv::Vec2s* xy_row = map_xy_.ptr<cv::Vec2s>(v);
     uint16_t* frac_row = map_frac_.ptr<uint16_t>(v);
-    float* depth_row = depth_.ptr<float>(v);
+    float* depth_row = background_depth_.ptr<float>(v);
     for (int u = 0; u < view.width; ++u) {
       const Eigen::Vector3f d = R * Eigen::Vector3f(ray_row[u][0], ray_row[u][1], 1.0f);
       const float tf = (yf - C.y()) / d.y();
       const float tb = (zb - C.z()) / d.z();
       int64_t fx = 0, fy = 0;
-      short row0 = 0;
+      short atlas_row = 0;
       if (d.y() > 0 && tf > 0 && C.z() + tf * d.z() < zb) {
         fx = fixed(C.x() + tf * d.x());
         fy = fixed(C.z() + tf * d.z());
-        row0 = floor_row;
+        atlas_row = floor_row;
         depth_row[u] = tf;
       } else if (d.z() > 0 && tb > 0) {
         fx = fixed(C.x() + tb * d.x());
@@ -207,68 +408,47 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
         depth_row[u] = std::numeric_limits<float>::infinity();
         continue;
       }
-      xy_row[u] = cv::Vec2s(static_cast<short>(fx / kSub), static_cast<short>(row0 + fy / kSub));
+      xy_row[u] =
+          cv::Vec2s(static_cast<short>(fx / kSub), static_cast<short>(atlas_row + fy / kSub));
       frac_row[u] = static_cast<uint16_t>((fy % kSub) * kSub + (fx % kSub));
     }
   }
-  cv::remap(atlas_, *bgr, map_xy_, map_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
-            cv::Scalar(200, 190, 180));
-  if (scene_.chessboard.present) drawChessboard(view, ray_map, bgr, &depth_);
-  owner_.create(view.height, view.width, CV_32S);
-  owner_.setTo(-1);
-  std::vector<int64_t> footprint(scene_.objects.size());
-  for (size_t i = 0; i < scene_.objects.size(); ++i) {
-    footprint[i] =
-        drawObject(scene_.objects[i], static_cast<int32_t>(i), t_s, view, ray_map, bgr, &depth_);
-  }
-  if (!visible_fraction) return;
-  std::vector<int64_t> shown(scene_.objects.size());
-  for (int v = 0; v < owner_.rows; ++v) {
-    const int32_t* row = owner_.ptr<int32_t>(v);
-    for (int u = 0; u < owner_.cols; ++u) {
-      if (row[u] >= 0) ++shown[static_cast<size_t>(row[u])];
-    }
-  }
-  visible_fraction->assign(scene_.objects.size(), 0.0);
-  for (size_t i = 0; i < footprint.size(); ++i) {
-    if (footprint[i] > 0) (*visible_fraction)[i] = static_cast<double>(shown[i]) / footprint[i];
-  }
+  cv::Mat out = bgr->rowRange(row0, row1);
+  cv::remap(atlas_, out, map_xy_.rowRange(row0, row1), map_frac_.rowRange(row0, row1),
+            cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(200, 190, 180));
+  if (scene_.chessboard.present) drawChessboard(view, rays, board_rect, row0, row1, bgr);
 }
 
-int64_t Renderer::drawObject(const SceneObject& object, int32_t index, double t_s,
-                             const CameraView& view, const cv::Mat& ray_map, cv::Mat* bgr,
-                             cv::Mat* depth) {
-  const Eigen::Vector3d centre = object.trajectory.position(t_s);
-  const cv::Rect rect = boundingRect(view, centre, object.boundingRadius());
-  if (rect.empty()) return 0;
+int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
+                             const CameraView& view, const RayRows& rays, int row0, int row1,
+                             cv::Mat* bgr) {
+  const cv::Rect& rect = frame.rect;
+  const int v0 = std::max(rect.y, row0), v1 = std::min(rect.y + rect.height, row1);
+  if (rect.empty() || v0 >= v1) return 0;
   int64_t footprint = 0;
   const Eigen::Matrix3d& R = view.rotation_head_camera;
-  const Eigen::Vector3d C = view.position_head_m;
-  const Eigen::Vector3d oc = C - centre;
-  const Eigen::Matrix3d box_to_head = object.rotationHeadObject(t_s);
-  const Eigen::Vector3d oc_box = box_to_head.transpose() * oc;
-  for (int v = rect.y; v < rect.y + rect.height; ++v) {
-    const cv::Vec2f* ray_row = ray_map.ptr<cv::Vec2f>(v);
+  const Eigen::Vector3d& oc = frame.oc;
+  const Eigen::Matrix3d& box_to_head = frame.box_to_head;
+  const Eigen::Vector3d& oc_box = frame.oc_box;
+  const bool sphere = object.shape == SceneObject::Shape::kSphere;
+  for (int v = v0; v < v1; ++v) {
+    const cv::Vec2f* ray_row = rays.row(v);
     cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
-    float* out_depth = depth->ptr<float>(v);
+    float* out_depth = depth_.ptr<float>(v);
     int32_t* out_owner = owner_.ptr<int32_t>(v);
     for (int u = rect.x; u < rect.x + rect.width; ++u) {
       const Eigen::Vector3d d = R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1.0);
       double t = -1;
-      Eigen::Vector3d normal;
-      Eigen::Vector2d surface_m;  // texture coordinates on the surface
-      if (object.shape == SceneObject::Shape::kSphere) {
+      Eigen::Vector3d db;  // box: the ray in the box's frame
+      int axis = -1;       // box: the axis of the face it meets
+      if (sphere) {
         const double b = oc.dot(d), a = d.squaredNorm();
         const double disc = b * b - a * (oc.squaredNorm() - object.radius_m * object.radius_m);
         if (disc < 0) continue;
         t = (-b - std::sqrt(disc)) / a;
-        normal = (oc + t * d) / object.radius_m;
-        surface_m = object.radius_m * Eigen::Vector2d(std::atan2(normal.x(), -normal.z()),
-                                                      std::asin(std::clamp(normal.y(), -1.0, 1.0)));
       } else {
-        const Eigen::Vector3d db = box_to_head.transpose() * d;
+        db = box_to_head.transpose() * d;
         double t_near = -1e30, t_far = 1e30;
-        int axis = -1;
         for (int k = 0; k < 3; ++k) {
           if (std::abs(db[k]) < 1e-12) {
             if (std::abs(oc_box[k]) > object.half_extents_m[k]) t_far = -1;
@@ -285,15 +465,27 @@ int64_t Renderer::drawObject(const SceneObject& object, int32_t index, double t_
         }
         if (t_near > t_far || axis < 0) continue;
         t = t_near;
+      }
+      if (t <= 0) continue;
+      ++footprint;
+      if (t >= out_depth[u]) continue;
+      // Shading only for the pixels it shows.
+      Eigen::Vector3d normal;
+      Eigen::Vector2d surface_m;  // texture coordinates on the surface
+      if (sphere) {
+        normal = (oc + t * d) / object.radius_m;
+        if (object.textured) {
+          surface_m =
+              object.radius_m * Eigen::Vector2d(std::atan2(normal.x(), -normal.z()),
+                                                std::asin(std::clamp(normal.y(), -1.0, 1.0)));
+        }
+      } else {
         Eigen::Vector3d n_box = Eigen::Vector3d::Zero();
         n_box[axis] = db[axis] > 0 ? -1 : 1;
         normal = box_to_head * n_box;
         const Eigen::Vector3d p_box = oc_box + t * db;
         surface_m = {p_box[(axis + 1) % 3], p_box[(axis + 2) % 3]};
       }
-      if (t <= 0) continue;
-      ++footprint;
-      if (t >= out_depth[u]) continue;
       out_depth[u] = static_cast<float>(t);
       out_owner[u] = index;
       out[u] = shade(object.color_bgr, normal);
@@ -309,34 +501,34 @@ int64_t Renderer::drawObject(const SceneObject& object, int32_t index, double t_
   return footprint;
 }
 
-void Renderer::drawChessboard(const CameraView& view, const cv::Mat& ray_map, cv::Mat* bgr,
-                              cv::Mat* depth) {
+void Renderer::drawChessboard(const CameraView& view, const RayRows& rays, const cv::Rect& rect,
+                              int row0, int row1, cv::Mat* bgr) {
   const Chessboard& b = scene_.chessboard;
-  // The board with a white margin of one square around the (inner + 1) squares.
+  // The board with a white margin of one square around the (inner + 1) squares (as render()).
   const double half_w = (b.inner_cols + 3) * b.square_m / 2;
   const double half_h = (b.inner_rows + 3) * b.square_m / 2;
-  const cv::Rect rect = boundingRect(view, b.centre_head_m, std::hypot(half_w, half_h));
-  if (rect.empty()) return;
+  const int v_begin = std::max(rect.y, row0), v_end = std::min(rect.y + rect.height, row1);
+  if (rect.empty() || v_begin >= v_end) return;
   const Eigen::Matrix3d& R = view.rotation_head_camera;
   const Eigen::Matrix3d Rb = b.rotation_head_board.transpose();
   const Eigen::Vector3d o = Rb * (view.position_head_m - b.centre_head_m);
   // Corner (0,0) of the squares grid sits at -(inner + 1)/2 squares from the centre.
   const double x0 = -(b.inner_cols + 1) * b.square_m / 2, y0 = -(b.inner_rows + 1) * b.square_m / 2;
   constexpr int kSub = 4;  // supersampling so corner positions are sub-pixel exact
-  for (int v = rect.y; v < rect.y + rect.height; ++v) {
+  for (int v = v_begin; v < v_end; ++v) {
     cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
-    float* out_depth = depth->ptr<float>(v);
+    float* out_depth = background_depth_.ptr<float>(v);
     for (int u = rect.x; u < rect.x + rect.width; ++u) {
       int hits = 0, white = 0;
       double t_centre = -1;
       // Rays between pixel centres: interpolate the ray map.
       const int u1 = std::min(u + 1, view.width - 1), v1 = std::min(v + 1, view.height - 1);
       const int u0 = std::max(u - 1, 0), v0 = std::max(v - 1, 0);
-      const cv::Vec2f& rc = ray_map.at<cv::Vec2f>(v, u);
-      const cv::Vec2f gx = (ray_map.at<cv::Vec2f>(v, u1) - ray_map.at<cv::Vec2f>(v, u0)) *
-                           (1.0f / static_cast<float>(std::max(1, u1 - u0)));
-      const cv::Vec2f gy = (ray_map.at<cv::Vec2f>(v1, u) - ray_map.at<cv::Vec2f>(v0, u)) *
-                           (1.0f / static_cast<float>(std::max(1, v1 - v0)));
+      const cv::Vec2f& rc = rays.row(v)[u];
+      const cv::Vec2f gx =
+          (rays.row(v)[u1] - rays.row(v)[u0]) * (1.0f / static_cast<float>(std::max(1, u1 - u0)));
+      const cv::Vec2f gy =
+          (rays.row(v1)[u] - rays.row(v0)[u]) * (1.0f / static_cast<float>(std::max(1, v1 - v0)));
       for (int s = 0; s < kSub * kSub; ++s) {
         const double du = ((s % kSub) + 0.5) / kSub - 0.5, dv = ((s / kSub) + 0.5) / kSub - 0.5;
         const cv::Vec2f r = rc + gx * static_cast<float>(du) + gy * static_cast<float>(dv);
@@ -383,8 +575,18 @@ void NoiseBank::apply(uint64_t frame_index, int camera, cv::Mat* bgr) const {
   cv::RNG rng(seed_ ^ (frame_index * 2654435761ULL) ^ (static_cast<uint64_t>(camera) << 40));
   const int dx = rng.uniform(0, 64), dy = rng.uniform(0, 64);
   const cv::Rect slice(dx, dy, bgr->cols, bgr->rows);
-  cv::add(*bgr, positive_(slice), *bgr);
-  cv::subtract(*bgr, negative_(slice), *bgr);
+  const cv::Mat positive = positive_(slice), negative = negative_(slice);
+  // Per pixel: bands of rows on all threads give the same image.
+  const int rows = bgr->rows, bands = autoBands(rows);
+  cv::parallel_for_(
+      cv::Range(0, bands),
+      [&](const cv::Range& range) {
+        const int row0 = bandRow(range.start, bands, rows), row1 = bandRow(range.end, bands, rows);
+        cv::Mat out = bgr->rowRange(row0, row1);
+        cv::add(out, positive.rowRange(row0, row1), out);
+        cv::subtract(out, negative.rowRange(row0, row1), out);
+      },
+      bands);
 }
 
 }  // namespace ptz::sim

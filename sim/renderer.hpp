@@ -18,33 +18,85 @@ class Renderer {
   // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise). With
   // visible_fraction: each scene object's share of its pixels in the image that no nearer
   // object (or the chessboard) hides; 0 where it has none in the image.
+  // On all of OpenCV's threads (cv::setNumThreads), in bands of rows: every pixel is computed
+  // alone, so image and fractions are byte-identical for any thread or band count.
   void render(const CameraView& view, double t_s, cv::Mat* bgr,
               std::vector<double>* visible_fraction = nullptr);
 
-  // Per-pixel undistorted normalised coordinates (x/z, y/z) of a view's pixels (CV_32FC2).
+  // Per-pixel undistorted normalised coordinates (x/z, y/z) of a view's pixels (CV_32FC2), as
+  // the render uses them.
   const cv::Mat& rays(const CameraView& view);
 
+  // Bands of rows the image is cut into (0: about 32 rows each); any count gives the same image.
+  void setBands(int bands) { bands_ = bands; }
+
  private:
-  struct RayCache {
+  // Undistorted normalised coordinates of every kGridStep-th pixel, per intrinsics: the rays of
+  // the pixels between are interpolated where a band needs them.
+  struct RayGrid {
     int width = 0, height = 0;
     Intrinsics intrinsics;
-    cv::Mat rays;
+    int columns = 0;  // grid points per row
+    std::vector<cv::Point2f> points;
   };
-  // Returns the pixels where the object's surface is in front of the camera (hidden or not);
-  // where it is the nearest, owner_ becomes its index.
-  int64_t drawObject(const SceneObject& object, int32_t index, double t_s, const CameraView& view,
-                     const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
-  void drawChessboard(const CameraView& view, const cv::Mat& rays, cv::Mat* bgr, cv::Mat* depth);
+  // A band's rays: those of rows [row0, row0 + rays->rows) of the image.
+  struct RayRows {
+    const cv::Mat* rays = nullptr;
+    int row0 = 0;
+    const cv::Vec2f* row(int v) const { return rays->ptr<cv::Vec2f>(v - row0); }
+  };
+  // One thread's memory for its bands' rays, kept from band to band.
+  struct RayScratch {
+    cv::Mat storage, rays;  // rays: the first rows of storage
+    std::vector<cv::Point2f> top, span;
+  };
+  const RayGrid& rayGrid(const CameraView& view);
+  static RayRows interpolateRays(const RayGrid& grid, int row0, int row1, RayScratch* scratch);
+  // What the background (floor, backdrop, chessboard) was last drawn for.
+  struct BackgroundKey {
+    int width = 0, height = 0;
+    Intrinsics intrinsics;
+    Eigen::Matrix3d rotation_head_camera;
+    Eigen::Vector3d position_head_m;
+    double backdrop_distance_m = 0, floor_height_m = 0, texture_m_per_texel = 0;
+    Chessboard chessboard;
+  };
+  // An object at this frame's time: what every band needs of it.
+  struct ObjectFrame {
+    cv::Rect rect;  // pixels its image may cover
+    Eigen::Vector3d oc, oc_box;
+    Eigen::Matrix3d box_to_head;
+  };
+  BackgroundKey backgroundKey(const CameraView& view) const;
+  static bool sameBackground(const BackgroundKey& a, const BackgroundKey& b);
+  // Rows [row0, row1) of the background into bgr and background_depth_.
+  void drawBackground(const CameraView& view, const RayRows& rays, const cv::Rect& board_rect,
+                      int row0, int row1, cv::Mat* bgr);
+  // Rows [row0, row1) of the object: returns its pixels there where its surface is in front of
+  // the camera (hidden or not); where it is the nearest, owner_ becomes its index.
+  int64_t drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
+                     const CameraView& view, const RayRows& rays, int row0, int row1, cv::Mat* bgr);
+  void drawChessboard(const CameraView& view, const RayRows& rays, const cv::Rect& rect, int row0,
+                      int row1, cv::Mat* bgr);
 
   const Scene& scene_;
   cv::Mat atlas_;                      // backdrop and floor textures, BGR8
   cv::Mat map_xy_, map_frac_, depth_;  // per-frame scratch, kept to avoid reallocation
   cv::Mat owner_;                      // CV_32S: the object each pixel shows (-1: none)
-  std::vector<RayCache> caches_;
+  cv::Mat background_depth_;           // CV_32F, m along the ray: the last background's
+  cv::Mat background_;                 // BGR8: the last background's image while kept
+  bool background_drawn_ = false, background_kept_ = false;
+  BackgroundKey background_key_;
+  std::vector<ObjectFrame> objects_;  // this frame's
+  std::vector<int64_t> band_counts_;  // per band, per object: footprint and shown pixels
+  std::vector<RayGrid> grids_;        // the last few intrinsics', newest last
+  cv::Mat rays_;                      // rays()'s
+  int bands_ = 0;
 };
 
 // Adds zero-mean Gaussian pixel noise from a bank drawn once (a random offset per frame), so the
-// noise costs a copy and stays deterministic for a given seed and frame index.
+// noise costs a copy (in bands of rows on all threads) and stays deterministic for a given seed
+// and frame index.
 class NoiseBank {
  public:
   NoiseBank(int width, int height, double sigma, unsigned seed);

@@ -30,7 +30,7 @@ void declare(Params& p) {
   addFrameOutputParams(p);
   addPreviewParams(p);
   addPlantParams(p);
-  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(p);
   p.add("clock", "realtime", "realtime or lockstep");
   p.add("frame_rate_hz", 30.0, "Hz", "stereo frame rate (sim time)", Range::between(0.1, 1000));
   p.add("frames", 0, "", "stop after this many frames (0: no limit)", Range::atLeast(0));

@@ -30,17 +30,15 @@ void Simulator::render(SimFrame* frame) {
   SimFrame& f = *frame;
   const CameraView left = rig_.view(Side::kLeft, f.left_pose);
   const CameraView right = rig_.view(Side::kRight, f.right_pose);
-  // The two cameras on two cores: the frame is out sooner (the render is the sim's readout
-  // latency). Nothing is shared between the two bodies but const data.
-  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-    for (int camera = range.start; camera < range.end; ++camera) {
-      cv::Mat* image = camera == 0 ? &f.left : &f.right;
-      (camera == 0 ? left_renderer_ : right_renderer_)
-          .render(camera == 0 ? left : right, f.t_s, image,
-                  &f.visible_fraction[static_cast<size_t>(camera)]);
-      noise_.apply(static_cast<uint64_t>(f.index), camera, image);
-    }
-  });
+  // One camera after the other, each on all cores in bands of rows (Renderer::render,
+  // NoiseBank::apply): balanced whatever each camera sees, and byte-identical to one thread.
+  for (int camera = 0; camera < 2; ++camera) {
+    cv::Mat* image = camera == 0 ? &f.left : &f.right;
+    (camera == 0 ? left_renderer_ : right_renderer_)
+        .render(camera == 0 ? left : right, f.t_s, image,
+                &f.visible_fraction[static_cast<size_t>(camera)]);
+    noise_.apply(static_cast<uint64_t>(f.index), camera, image);
+  }
 }
 
 void Simulator::command(double t_s, const PtzPose& left, const PtzPose& right, int* clamped,

@@ -50,7 +50,7 @@ class Simulator {
   StereoRig rig_;
   std::unique_ptr<Scene> scene_;  // the renderer keeps a reference: a stable address
   PtzPlant plant_;
-  Renderer left_renderer_, right_renderer_;  // one each: both cameras render in parallel
+  Renderer left_renderer_, right_renderer_;  // one each: their caches stay warm
   NoiseBank noise_;
   int64_t next_index_ = 0;
 };

@@ -24,13 +24,15 @@ void declare(Params& p) {
   addFreshnessParams(p, "tracks", 500.0, "an OBJECT_TRACKS");
   addPlantParams(p);  // the limits; the motor model itself is the plant's business
   const ControllerParams d;
-  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(p);
   p.add("mode", "track",
         "track (default: zero steady-state error, feed-forward), paper, or smith (long delays)");
   p.add("paper_gain", d.paper_gain, "", "P gain of the paper mode", Range::above(0));
-  p.add("zoom_mode", "size", "size (keep target_radius_px) or hold");
-  p.add("target_radius_px", d.target_radius_px, "px", "reference apparent radius of the target",
-        Range::above(0));
+  p.add("zoom_mode", "size", "size (keep target_radius_vga_px) or hold");
+  p.add(
+      "target_radius_vga_px", d.target_radius_vga_px, "px",
+      "reference apparent radius of the target in VGA-equivalent px (scaled with the image width)",
+      Range::above(0));
   p.add("max_zoom", d.max_zoom, "ratio", "highest zoom the controller asks for", Range::above(0));
   p.add("lead_s", d.lead_s, "s",
         "track: feed-forward horizon, the motor's time constant T plus the capture -> command "
@@ -103,7 +105,7 @@ ControllerParams controllerParams(const Params& p) {
   c.mode = p.getString("mode");
   c.paper_gain = p.getDouble("paper_gain");
   c.zoom_mode = p.getString("zoom_mode");
-  c.target_radius_px = p.getDouble("target_radius_px");
+  c.target_radius_vga_px = p.getDouble("target_radius_vga_px");
   c.max_zoom = p.getDouble("max_zoom");
   c.lead_s = p.getDouble("lead_s");
   c.rate_filter_s = p.getDouble("rate_filter_s");

@@ -3,7 +3,7 @@
 // Error (paper, eq. 8): e = p_object - p_ref with p_ref on the optical axes through the image
 // centres at the reference apparent size. For each camera, aimAt() turns the 3D position into
 // the pan/tilt angles theta* that put the object at that camera's image centre (vergence
-// follows), and the zoom law turns the range into the zoom that gives it `target_radius_px`.
+// follows), and the zoom law turns the range into the zoom that gives it `target_radius_vga_px`.
 //
 // Modes:
 // - "track" (default): u = theta*(t) + omega_hat * lead_s per axis. theta* comes from the 3D
@@ -51,8 +51,10 @@ namespace ptz::control {
 struct ControllerParams {
   std::string mode = "track";  // "track", "paper" or "smith"
   double paper_gain = 1.7;
-  std::string zoom_mode = "size";  // "size" (keep target_radius_px) or "hold"
-  double target_radius_px = 30.0;
+  std::string zoom_mode = "size";  // "size" (keep target_radius_vga_px) or "hold"
+  // In VGA-equivalent px: at another image width the radius scales with it (the same share of
+  // the image at every resolution).
+  double target_radius_vga_px = 30.0;
   double max_zoom = 4.0;
   // Feed-forward horizon (track): the motor's time constant T plus the capture -> command
   // delay; in lockstep that delay is ~0 plus half a frame of sample-and-hold.

@@ -5,15 +5,16 @@
 #include <pcl/common/point_tests.h>
 #include <pcl/conversions.h>
 #include <pcl/filters/statistical_outlier_removal.h>
-#include <pcl/filters/voxel_grid.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "common/config.hpp"
@@ -39,60 +40,162 @@ CloudParams CloudParams::fromParams(const Params& p) {
   return c;
 }
 
+void voxelGridFilter(const std::vector<cv::Point3f>& points, const std::vector<cv::Vec3b>& colours,
+                     double leaf_m, std::vector<cv::Point3f>* out_points,
+                     std::vector<cv::Vec3b>* out_colours, VoxelGridScratch* scratch) {
+  CV_Assert(colours.size() == points.size() && leaf_m > 0);
+  out_points->clear();
+  out_colours->clear();
+  const size_t n = points.size();
+  if (n == 0) return;
+  // PCL's arithmetic, in float, step by step: the same voxel for every point.
+  const float inverse_leaf = 1.0f / static_cast<float>(leaf_m);
+  cv::Point3f lo = points[0], hi = points[0];
+  for (const cv::Point3f& p : points) {
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+  }
+  const int64_t dx = static_cast<int64_t>((hi.x - lo.x) * inverse_leaf) + 1;
+  const int64_t dy = static_cast<int64_t>((hi.y - lo.y) * inverse_leaf) + 1;
+  const int64_t dz = static_cast<int64_t>((hi.z - lo.z) * inverse_leaf) + 1;
+  if (dx * dy * dz > std::numeric_limits<int32_t>::max()) {
+    *out_points = points;
+    *out_colours = colours;
+    return;
+  }
+  const auto cellOf = [inverse_leaf](float v) {
+    return static_cast<int>(std::floor(v * inverse_leaf));
+  };
+  const int min_x = cellOf(lo.x), min_y = cellOf(lo.y), min_z = cellOf(lo.z);
+  const int div_x = cellOf(hi.x) - min_x + 1, div_y = cellOf(hi.y) - min_y + 1;
+  VoxelGridScratch local;
+  VoxelGridScratch& buffers = scratch ? *scratch : local;
+  std::vector<uint32_t>& key = buffers.key;
+  std::vector<uint32_t>& order = buffers.order;
+  std::vector<uint32_t>& swap = buffers.swap;
+  key.resize(n);
+  order.resize(n);
+  swap.resize(n);
+  uint32_t max_key = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const cv::Point3f& p = points[i];
+    const int ix = static_cast<int>(std::floor(p.x * inverse_leaf) - static_cast<float>(min_x));
+    const int iy = static_cast<int>(std::floor(p.y * inverse_leaf) - static_cast<float>(min_y));
+    const int iz = static_cast<int>(std::floor(p.z * inverse_leaf) - static_cast<float>(min_z));
+    key[i] = static_cast<uint32_t>(ix + iy * div_x + iz * div_x * div_y);
+    max_key = std::max(max_key, key[i]);
+    order[i] = static_cast<uint32_t>(i);
+  }
+  // Stable LSD radix sort of the points by voxel, 11 bits a pass.
+  constexpr int kBits = 11;
+  constexpr uint32_t kMask = (1u << kBits) - 1;
+  for (int shift = 0; shift < 32 && (max_key >> shift) != 0; shift += kBits) {
+    std::array<uint32_t, (1u << kBits) + 1> start{};
+    for (uint32_t i : order) ++start[((key[i] >> shift) & kMask) + 1];
+    for (size_t b = 1; b < start.size(); ++b) start[b] += start[b - 1];
+    for (uint32_t i : order) swap[start[(key[i] >> shift) & kMask]++] = i;
+    order.swap(swap);
+  }
+  for (size_t first = 0; first < n;) {
+    const uint32_t k = key[order[first]];
+    float x = 0, y = 0, z = 0, b = 0, g = 0, r = 0;
+    size_t last = first;
+    for (; last < n && key[order[last]] == k; ++last) {
+      const cv::Point3f& p = points[order[last]];
+      const cv::Vec3b& c = colours[order[last]];
+      x += p.x;
+      y += p.y;
+      z += p.z;
+      b += c[0];
+      g += c[1];
+      r += c[2];
+    }
+    const float count = static_cast<float>(last - first);
+    out_points->emplace_back(x / count, y / count, z / count);
+    out_colours->emplace_back(static_cast<uchar>(b / count), static_cast<uchar>(g / count),
+                              static_cast<uchar>(r / count));
+    first = last;
+  }
+}
+
+void CloudMaker::make(const std::vector<cv::Point3f>& points, const std::vector<cv::Vec3b>& colours,
+                      ptzstereo::point_cloud_t* cloud) {
+  const std::vector<cv::Point3f>* p = &points;
+  const std::vector<cv::Vec3b>* c = &colours;
+  if (params_.voxel_size_m > 0) {
+    voxelGridFilter(points, colours, params_.voxel_size_m, &points_, &colours_, &scratch_);
+    p = &points_;
+    c = &colours_;
+  }
+  if (params_.sor_mean_k > 0 && p->size() > static_cast<size_t>(params_.sor_mean_k)) {
+    using Cloud = pcl::PointCloud<pcl::PointXYZRGB>;
+    Cloud::Ptr in(new Cloud);
+    in->resize(p->size());
+    for (size_t i = 0; i < p->size(); ++i) {
+      pcl::PointXYZRGB& q = (*in)[i];
+      q.x = (*p)[i].x;
+      q.y = (*p)[i].y;
+      q.z = (*p)[i].z;
+      q.b = (*c)[i][0];
+      q.g = (*c)[i][1];
+      q.r = (*c)[i][2];
+    }
+    Cloud kept;
+    pcl::StatisticalOutlierRemoval<pcl::PointXYZRGB> sor;
+    sor.setMeanK(params_.sor_mean_k);
+    sor.setStddevMulThresh(params_.sor_stddev_mult);
+    sor.setInputCloud(in);
+    sor.filter(kept);
+    std::vector<cv::Point3f> kept_points;
+    std::vector<cv::Vec3b> kept_colours;
+    for (const pcl::PointXYZRGB& q : kept) {
+      kept_points.emplace_back(q.x, q.y, q.z);
+      kept_colours.emplace_back(q.b, q.g, q.r);
+    }
+    points_.swap(kept_points);
+    colours_.swap(kept_colours);
+    p = &points_;
+    c = &colours_;
+  }
+  // pcl::toPCLPointCloud2's packing of pcl::PointXYZRGB, written in place: x, y, z, w = 1 at 0,
+  // rgba (b, g, r, 255 from the lowest byte) at 16, padding to 32.
+  static_assert(sizeof(pcl::PointXYZRGB) == 32);
+  constexpr int32_t kPointBytes = 32, kRgbOffsetBytes = 16;
+  const int8_t kFloat = ptzstereo::point_field_t::FLOAT32;
+  const auto n = static_cast<int32_t>(p->size());
+  ptzstereo::point_cloud_t& m = *cloud;
+  m.frame_id = "head";
+  m.width = n;
+  m.height = 1;
+  m.is_dense = true;
+  m.is_bigendian = false;
+  m.fields = {{"x", 0, kFloat, 1},
+              {"y", 4, kFloat, 1},
+              {"z", 8, kFloat, 1},
+              {"rgb", kRgbOffsetBytes, kFloat, 1}};
+  m.num_fields = static_cast<int32_t>(m.fields.size());
+  m.point_step = kPointBytes;
+  m.row_step = kPointBytes * n;
+  m.data.assign(static_cast<size_t>(kPointBytes) * p->size(), 0);
+  for (size_t i = 0; i < p->size(); ++i) {
+    uint8_t* d = m.data.data() + i * kPointBytes;
+    const cv::Point3f& q = (*p)[i];
+    const cv::Vec3b& bgr = (*c)[i];
+    const float xyzw[4] = {q.x, q.y, q.z, 1.0f};
+    const uint32_t rgba = 0xff000000u | static_cast<uint32_t>(bgr[2]) << 16 |
+                          static_cast<uint32_t>(bgr[1]) << 8 | bgr[0];
+    std::memcpy(d, xyzw, sizeof(xyzw));
+    std::memcpy(d + kRgbOffsetBytes, &rgba, sizeof(rgba));
+  }
+  m.data_size = static_cast<int32_t>(m.data.size());
+}
+
 ptzstereo::point_cloud_t makeCloud(const std::vector<cv::Point3f>& points,
                                    const std::vector<cv::Vec3b>& colours,
                                    const CloudParams& params) {
-  using Cloud = pcl::PointCloud<pcl::PointXYZRGB>;
-  Cloud::Ptr cloud(new Cloud);
-  cloud->resize(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    pcl::PointXYZRGB& q = (*cloud)[i];
-    q.x = points[i].x;
-    q.y = points[i].y;
-    q.z = points[i].z;
-    q.b = colours[i][0];
-    q.g = colours[i][1];
-    q.r = colours[i][2];
-  }
-  cloud->width = static_cast<uint32_t>(cloud->size());
-  cloud->height = 1;
-  cloud->is_dense = true;
-  if (params.voxel_size_m > 0 && !cloud->empty()) {
-    Cloud::Ptr down(new Cloud);
-    pcl::VoxelGrid<pcl::PointXYZRGB> grid;
-    const float leaf = static_cast<float>(params.voxel_size_m);
-    grid.setLeafSize(leaf, leaf, leaf);
-    grid.setInputCloud(cloud);
-    grid.filter(*down);
-    cloud = down;
-  }
-  if (params.sor_mean_k > 0 && cloud->size() > static_cast<size_t>(params.sor_mean_k)) {
-    Cloud::Ptr kept(new Cloud);
-    pcl::StatisticalOutlierRemoval<pcl::PointXYZRGB> sor;
-    sor.setMeanK(params.sor_mean_k);
-    sor.setStddevMulThresh(params.sor_stddev_mult);
-    sor.setInputCloud(cloud);
-    sor.filter(*kept);
-    cloud = kept;
-  }
-  pcl::PCLPointCloud2 packed;
-  pcl::toPCLPointCloud2(*cloud, packed);
-  ptzstereo::point_cloud_t msg{};
-  msg.frame_id = "head";
-  msg.width = static_cast<int32_t>(packed.width);
-  msg.height = static_cast<int32_t>(packed.height);
-  msg.is_dense = packed.is_dense;
-  msg.is_bigendian = packed.is_bigendian;
-  for (const auto& f : packed.fields) {
-    msg.fields.push_back({f.name, static_cast<int32_t>(f.offset), static_cast<int8_t>(f.datatype),
-                          static_cast<int32_t>(f.count)});
-  }
-  msg.num_fields = static_cast<int32_t>(msg.fields.size());
-  msg.point_step = static_cast<int32_t>(packed.point_step);
-  msg.row_step = static_cast<int32_t>(packed.row_step);
-  msg.data = std::move(packed.data);
-  msg.data_size = static_cast<int32_t>(msg.data.size());
-  return msg;
+  ptzstereo::point_cloud_t cloud{};
+  CloudMaker(params).make(points, colours, &cloud);
+  return cloud;
 }
 
 namespace {

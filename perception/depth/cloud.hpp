@@ -1,10 +1,11 @@
-// The scene cloud: coloured head-frame points through PCL's voxel grid and statistical outlier
-// removal, packed in PCL's layout (pcl::PointXYZRGB) as a point_cloud_t, and written as PCD.
-// PCL stays inside cloud.cpp: this header is cheap to include.
+// The scene cloud: coloured head-frame points through a voxel grid (PCL's, without PCL) and
+// PCL's statistical outlier removal, packed in PCL's layout (pcl::PointXYZRGB) as a
+// point_cloud_t, and written as PCD. PCL stays inside cloud.cpp: this header is cheap to include.
 #pragma once
 
 #include <opencv2/core.hpp>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,35 @@ struct CloudParams {
 };
 void declareCloudParams(Params& params);
 
+// Buffers of voxelGridFilter, kept between frames.
+struct VoxelGridScratch {
+  std::vector<uint32_t> key, order, swap;
+};
+// PCL's VoxelGrid (1.13) without PCL's copies, ~4x faster: the centroid and the mean colour
+// (truncated) of each occupied voxel of leaf_m, in the order of the voxels' index. The points of
+// a voxel are summed in their order (PCL leaves it to its sort: centroids may differ in the last
+// bit). Leaves too small for 32-bit voxel indices keep every point, as PCL does.
+void voxelGridFilter(const std::vector<cv::Point3f>& points, const std::vector<cv::Vec3b>& colours,
+                     double leaf_m, std::vector<cv::Point3f>* out_points,
+                     std::vector<cv::Vec3b>* out_colours, VoxelGridScratch* scratch = nullptr);
+
 // Filters the points and packs them (x, y, z, rgb; PCL's 32-byte PointXYZRGB) with frame_id
-// "head"; the caller stamps utime, frame_seq and publish_utime.
+// "head"; the caller stamps utime, frame_seq and publish_utime. Keeps its buffers, and those of
+// the cloud it fills, between frames: no allocation (nor page faults) once the sizes settle.
+class CloudMaker {
+ public:
+  explicit CloudMaker(CloudParams params) : params_(params) {}
+  void make(const std::vector<cv::Point3f>& points_head_m,
+            const std::vector<cv::Vec3b>& colours_bgr, ptzstereo::point_cloud_t* cloud);
+  const CloudParams& params() const { return params_; }
+
+ private:
+  CloudParams params_;
+  VoxelGridScratch scratch_;
+  std::vector<cv::Point3f> points_;
+  std::vector<cv::Vec3b> colours_;
+};
+// The same for a single cloud.
 ptzstereo::point_cloud_t makeCloud(const std::vector<cv::Point3f>& points_head_m,
                                    const std::vector<cv::Vec3b>& colours_bgr,
                                    const CloudParams& params);

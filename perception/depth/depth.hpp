@@ -1,13 +1,14 @@
 // Dense depth from a PTZ stereo pair (paper, section 2.4): rectification with the frame's own
 // geometry, block matching (OpenCV StereoBM, or StereoSGBM as a quality mode) over a horopter
-// that can follow the target, and reprojection of every valid disparity into the head frame.
-// No PCL here (cloud.hpp holds it) and no LCM.
+// that can follow the target, and reprojection of the sampled valid disparities into the head
+// frame. Large frames are matched decimated. No PCL here (cloud.hpp holds it) and no LCM.
 #pragma once
 
 #include <Eigen/Core>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -67,10 +68,21 @@ class DisparityMatcher {
   cv::Mat left_pad_, right_pad_, disp_pad_;  // scratch of full_width
 };
 
-// Rectification of one stereo geometry (both views and their relative pose).
+// The smallest integer factor that brings width_px to at most max_width_px (<= 0: 1).
+int decimationFor(int width_px, int max_width_px);
+// The rig's cameras read out decimated by an integer factor, as f x f blocks averaged
+// (cv::INTER_AREA) of the image cropped to a multiple of f: focal lengths / f, pixel centres
+// (x + 0.5) / f - 0.5, size / f rounded down.
+StereoRig decimatedRig(const StereoRig& rig, int factor);
+
+// Rectification of one stereo geometry (both views and their relative pose), at the matched size.
 struct Rectification {
-  cv::Mat map_left[2], map_right[2];  // initUndistortRectifyMap, fixed point
-  cv::Mat R1, R2, P1, P2, Q;          // cv::stereoRectify
+  // initUndistortRectifyMap, fixed point: rectified pixel of the matched size to a pixel of the
+  // input decimated by `decimation`.
+  cv::Mat map_left[2], map_right[2];
+  cv::Mat R1, R2, P1, P2, Q;  // cv::stereoRectify, of the matched size
+  cv::Size size;              // the matched size
+  int decimation = 1;
   // Rectified-left camera frame to head frame.
   Eigen::Matrix3d rotation_head_rect = Eigen::Matrix3d::Identity();
   Eigen::Vector3d position_head_m = Eigen::Vector3d::Zero();
@@ -84,18 +96,21 @@ struct Rectification {
 };
 
 // Builds rectification maps for the pose of a frame; rebuilds only when the pose changes.
+// decimation > 1: the maps and P, Q are those of the rig decimated by it (decimatedRig).
 class Rectifier {
  public:
-  explicit Rectifier(StereoRig rig) : rig_(std::move(rig)) {}
+  explicit Rectifier(StereoRig rig, int decimation = 1);
   // False (with the reason) when the geometry is unknown: zoom outside the calibrated table or
   // non-finite angles.
   bool update(const PtzPose& left, const PtzPose& right, std::string* why);
   const Rectification& current() const { return rect_; }
   int rebuilds() const { return rebuilds_; }
-  const StereoRig& rig() const { return rig_; }
+  const StereoRig& rig() const { return rig_; }  // at the input size
+  int decimation() const { return decimation_; }
 
  private:
-  StereoRig rig_;
+  StereoRig rig_, matched_rig_;
+  int decimation_;
   Rectification rect_;
   std::optional<std::pair<PtzPose, PtzPose>> pose_;
   int rebuilds_ = 0;
@@ -116,7 +131,10 @@ struct DepthParams {
   HoropterParams horopter;
   double min_depth_m = 0.3;   // points nearer or farther are dropped
   double max_depth_m = 20.0;  // (depth along the rectified left axis)
-  int cloud_stride_px = 4;    // reproject every n-th pixel in x and y
+  int cloud_stride_px = 4;    // reproject every n-th pixel of the matched pair in x and y
+  // Wider pairs are matched decimated by the smallest integer factor that brings them to at most
+  // this width (0: never): 1080p at 960 x 540.
+  int match_max_width_px = 1000;
   // Statistical outlier removal on the sampling grid: a point whose spread (the mean, over the
   // grid's four directions, of the distance to the nearer neighbour that way, relative to its
   // range) is this many standard deviations above the frame's mean is dropped, as is a point
@@ -129,21 +147,34 @@ struct DepthParams {
 // Declares the parameters of DepthParams with their defaults, units and help.
 void declareDepthParams(Params& params);
 
+// Buffers of removeGridOutliers, kept between frames.
+struct GridOutlierScratch {
+  std::vector<std::array<float, 4>> nearer;
+  std::vector<double> spread;
+};
 // Drops the grid outliers of outlier_stddev_mult (above) from points and colours. cell: for each
 // node of a grid of `cols` columns (row-major), the index of its point or -1; depths: each
-// point's depth along the camera's axis. Returns how many it dropped.
+// point's depth along the camera's axis; scratch: optional. Returns how many it dropped.
 size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vector<float>& depths,
                           double stddev_mult, std::vector<cv::Point3f>* points,
-                          std::vector<cv::Vec3b>* colours);
+                          std::vector<cv::Vec3b>* colours, GridOutlierScratch* scratch = nullptr);
+
+// Wall-clock time of each step of DepthEstimator::process.
+struct DepthStepTimes {
+  double rectify_ms = 0;    // grey, decimation, remap; the samples' colours
+  double match_ms = 0;      // DisparityMatcher::compute
+  double reproject_ms = 0;  // sampling, reprojection
+  double outliers_ms = 0;   // removeGridOutliers
+};
 
 // Valid disparities of one frame as head-frame points with the left image's colour.
 struct DepthFrame {
   std::vector<cv::Point3f> points_head_m;
   std::vector<cv::Vec3b> colours_bgr;
   size_t outliers_dropped = 0;  // by the grid outlier filter
-  cv::Mat disparity_16s;        // rectified left view
-  cv::Mat left_rectified_bgr;
-  int min_disparity_px = 0;
+  cv::Mat disparity_16s;        // rectified left view, at the matched size
+  int min_disparity_px = 0;     // in pixels of the matched size
+  DepthStepTimes times;
 };
 
 // Rectify + match + reproject for frames of a rig; keeps its maps and matcher between frames.
@@ -151,19 +182,36 @@ class DepthEstimator {
  public:
   DepthEstimator(StereoRig rig, DepthParams params);
   // BGR8 images of the rig's size, each with its PTZ pose at capture. False (why set) when the
-  // geometry of the frame is unknown.
+  // geometry of the frame is unknown or the images are not of the rig's size. Reusing `out`
+  // reuses its buffers.
   bool process(const cv::Mat& left_bgr, const cv::Mat& right_bgr, const PtzPose& left_pose,
                const PtzPose& right_pose, const std::optional<Eigen::Vector3d>& target_head_m,
                DepthFrame* out, std::string* why);
   const Rectifier& rectifier() const { return rectifier_; }
   const DepthParams& params() const { return params_; }
+  int decimation() const { return rectifier_.decimation(); }
+  // The grey rectified pair of the last frame, as matched.
+  const cv::Mat& matchedLeft() const { return left_rect_; }
+  const cv::Mat& matchedRight() const { return right_rect_; }
 
  private:
+  // Both images to grey, decimated and rectified; the samples' colours.
+  void rectifyPair(const cv::Mat& left_bgr, const cv::Mat& right_bgr);
+  void buildSampleMap();
+
   DepthParams params_;
   Rectifier rectifier_;
   DisparityMatcher matcher_;
-  cv::Mat left_gray_, right_gray_, right_rect_;  // scratch
-  std::vector<int> cell_;                        // sampling grid -> point index
+  // Scratch, kept between frames: no allocation once the sizes settle.
+  cv::Mat left_grey_, right_grey_, left_small_, right_small_, left_rect_, right_rect_;
+  // The left rectification map at the samples only, into the input image: their colours
+  // without a rectified colour image (rebuilt with the rectification).
+  cv::Mat sample_map_[2], sample_bgr_;
+  int sample_map_rebuilds_ = -1;
+  std::vector<int> cell_;  // sampling grid -> point index
+  std::vector<cv::Point3f> xyd_;
+  std::vector<float> depths_;
+  GridOutlierScratch outlier_scratch_;
 };
 
 }  // namespace ptz::perception

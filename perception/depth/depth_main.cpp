@@ -23,7 +23,7 @@ namespace {
 void declare(Params& p) {
   addTransportParams(p);
   addFrameOutputParams(p);
-  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(p);
   declareDepthParams(p);
   declareCloudParams(p);
   addFreshnessParams(p, "frame", 1000.0, "a STEREO_FRAME");
@@ -51,7 +51,7 @@ class DepthNode {
         cloud_preview_max_bytes_(p.getInt("cloud_preview_max_bytes")),
         ch_cloud_preview_(channel(p, channels::kPointCloudPreview)),
         estimator_(std::move(rig), DepthParams::fromParams(p)),
-        cloud_params_(CloudParams::fromParams(p)),
+        cloud_maker_(CloudParams::fromParams(p)),
         target_max_age_us_(static_cast<int64_t>(p.getDouble("target_max_age_s") * 1e6)),
         frame_freshness_(freshnessFrom(p, "frame")),
         pcd_path_(p.getString("pcd_path")),
@@ -137,8 +137,8 @@ class DepthNode {
       drop("unknown_geometry", "frame " + std::to_string(m.seq) + ": " + why);
       return;
     }
-    ptzstereo::point_cloud_t cloud =
-        makeCloud(depth_.points_head_m, depth_.colours_bgr, cloud_params_);
+    cloud_maker_.make(depth_.points_head_m, depth_.colours_bgr, &cloud_);
+    ptzstereo::point_cloud_t& cloud = cloud_;
     processing_ms_.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     // Counted in once it made a cloud: every frame is either in or dropped, never both.
@@ -203,7 +203,8 @@ class DepthNode {
   std::string ch_cloud_preview_;
   RateLimitedLog log_;
   DepthEstimator estimator_;
-  CloudParams cloud_params_;
+  CloudMaker cloud_maker_;
+  ptzstereo::point_cloud_t cloud_;  // its buffers kept between frames
   int64_t target_max_age_us_;
   FreshnessLimits frame_freshness_;
   std::string pcd_path_;

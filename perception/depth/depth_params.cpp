@@ -8,10 +8,12 @@ void declareDepthParams(Params& p) {
   p.add("mode", "bm", "matcher: bm (the paper's block matching) or sgbm (quality mode)");
   p.add("full_width", false, "pad the images so the left edge is matched too");
   p.add("wls", false, "filter the disparity with ximgproc's WLS filter (fills holes)");
-  p.add("num_disparities", 64, "px", "width of the disparity search range, a multiple of 16",
+  p.add("num_disparities", 64, "px",
+        "width of the disparity search range (pixels of the matched pair), a multiple of 16",
         Range::between(16, 1024));
   p.add("min_disparity_px", 0, "px",
-        "start of the search range when neither target nor horopter_far_m sets it",
+        "start of the search range (pixels of the matched pair) when neither target nor "
+        "horopter_far_m sets it",
         Range::between(-4096, 4096));
   p.add("horopter_far_m", 10.0, "m",
         "without a target the search range starts at this depth's disparity (<= 0: "
@@ -35,8 +37,13 @@ void declareDepthParams(Params& p) {
   p.add("max_depth_m", 20.0, "m", "farthest reconstructed depth", Range::above(0));
   p.addOrder("min_depth_m", "max_depth_m");
   p.add("cloud_stride_px", 4, "px",
-        "reproject every n-th pixel in x and y (the voxel grid would merge them anyway)",
+        "reproject every n-th pixel of the matched pair in x and y (the voxel grid would merge "
+        "them anyway)",
         Range::between(1, 1000));
+  p.add("match_max_width_px", 1000, "px",
+        "wider frames are matched decimated by the smallest integer factor that brings them to "
+        "at most this width (1080p: at 960x540; 0: never)",
+        Range::atLeast(0));
   p.add("outlier_stddev_mult", 1.0, "",
         "drop points whose distance to their nearer pixel-grid neighbour in each direction "
         "(mean, relative to range) is this many standard deviations above the frame's mean "
@@ -71,6 +78,7 @@ DepthParams DepthParams::fromParams(const Params& p) {
   d.min_depth_m = p.getDouble("min_depth_m");
   d.max_depth_m = p.getDouble("max_depth_m");
   d.cloud_stride_px = p.getInt("cloud_stride_px");
+  d.match_max_width_px = p.getInt("match_max_width_px");
   d.outlier_stddev_mult = p.getDouble("outlier_stddev_mult");
   // The ranges and the depths' order are the declarations'; what they cannot say:
   if (m.num_disparities % 16 != 0) throw p.invalid("num_disparities", "must be a multiple of 16");

@@ -18,6 +18,7 @@
 #include "perception/detect/detector.hpp"
 #include "perception/detect/jpeg_window.hpp"
 #include "perception/detect/orientation.hpp"
+#include "perception/detect/pyramid.hpp"
 #include "perception/detect/stereo.hpp"
 #include "perception/detect/target.hpp"
 #include "perception/detect/tracker.hpp"
@@ -33,7 +34,7 @@ namespace {
 
 void declare(Params& p) {
   addTransportParams(p);
-  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(p);
   p.add("target_class", "red_ball",
         "class of the object of interest until TARGET_SELECT says otherwise");
   p.add("filter_size_px", 3, "px", "median filter size (odd)", Range::between(1, 99));
@@ -106,6 +107,10 @@ void declare(Params& p) {
   p.add("window_sigma_scale", w.sigma_scale, "",
         "windows: a track's extent is its radius plus this many sigma of its predicted position",
         Range::between(0, 100));
+  p.add("full_scan_max_width_px", w.full_scan_max_width_px, "px",
+        "full scans of wider images find their objects on the image reduced by 2, 4 or 8 (to this "
+        "width or less), then detect at full resolution only around them (0: off)",
+        Range::between(0, 4096));
   p.addSection("classes",
                "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
                "intensity_min, intensity_max, shape: circle|square|any, "
@@ -149,6 +154,7 @@ WindowParams windowParams(const Params& p) {
   w.full_scan_every = p.getInt("window_full_scan_every");
   w.margin_px = p.getDouble("window_margin_px");
   w.sigma_scale = p.getDouble("window_sigma_scale");
+  w.full_scan_max_width_px = p.getInt("full_scan_max_width_px");
   return w;
 }
 
@@ -189,6 +195,30 @@ bool decodeParts(const ptzstereo::image_t& m, const std::vector<cv::Rect>& rects
   parts->clear();
   for (const auto& r : rects) parts->push_back(image(r));
   return true;
+}
+
+// The whole image (checked by checkStereoFrame, colour by checkFrameMatchesRig) reduced by `scale`
+// as BGR: a JPEG scaled in its decoder, raw pixels area-averaged from the message's own bytes.
+bool decodeReduced(const ptzstereo::image_t& m, int scale, cv::Mat* out, std::string* why) {
+  if (m.encoding == ptzstereo::image_t::ENCODING_JPEG) {
+    if (!decodeJpegReduced(m.data.data(), m.data.size(), m.width, m.height, scale, out, why))
+      return false;
+  } else {
+    const cv::Mat view(m.height, m.width, CV_8UC3, const_cast<uint8_t*>(m.data.data()),
+                       static_cast<size_t>(m.row_stride));
+    cv::resize(view, *out, reducedSize({m.width, m.height}, scale), 0, 0, cv::INTER_AREA);
+  }
+  if (m.pixel_format == ptzstereo::image_t::PIXEL_RGB8) cv::cvtColor(*out, *out, cv::COLOR_RGB2BGR);
+  return true;
+}
+
+// Both ways of reading an image, for WindowScanner::detect.
+ImagePixels pixelsOf(const ptzstereo::image_t& m) {
+  return {
+      [&m](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
+        return decodeParts(m, r, out, e);
+      },
+      [&m](int scale, cv::Mat* out, std::string* e) { return decodeReduced(m, scale, out, e); }};
 }
 
 std::vector<std::string> classNames(const DetectorParams& dp) {
@@ -328,15 +358,8 @@ class DetectNode {
     ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
     std::vector<Region> lr, rr;
     std::string why;
-    const bool decoded = windows_.detect(
-        detector_, &plan,
-        [&](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
-          return decodeParts(m->left, r, out, e);
-        },
-        [&](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
-          return decodeParts(m->right, r, out, e);
-        },
-        &lr, &rr, &why);
+    const bool decoded =
+        windows_.detect(detector_, &plan, pixelsOf(m->left), pixelsOf(m->right), &lr, &rr, &why);
     if (!decoded) {
       drop("bad_image", "frame " + std::to_string(m->seq) + ": " + why);
       return;

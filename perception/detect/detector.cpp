@@ -244,16 +244,22 @@ std::vector<Region> Detector::detectWindow(const cv::Mat& crop, const cv::Point&
   const int y1 = window.br().y < image.height ? window.br().y - 1 : image.height;
   const cv::Rect interior(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0));
   *cut = false;
-  return detectIn(crop, crop_origin, &window, &interior, cut);
+  return detectIn(crop, crop_origin, &window, &interior, cut, Limits());
 }
 
 std::vector<Region> Detector::detect(const cv::Mat& bgr, const cv::Point& offset) const {
-  return detectIn(bgr, offset, nullptr, nullptr, nullptr);
+  return detectIn(bgr, offset, nullptr, nullptr, nullptr, Limits());
+}
+
+std::vector<Region> Detector::detectReduced(const cv::Mat& reduced_bgr, int scale) const {
+  const double area_per_px2 = 1.0 / (static_cast<double>(scale) * scale);
+  const Limits limits{area_per_px2 / kReducedAreaSlack, area_per_px2 * kReducedAreaSlack, false};
+  return detectIn(reduced_bgr, cv::Point(0, 0), nullptr, nullptr, nullptr, limits);
 }
 
 std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offset,
-                                       const cv::Rect* window, const cv::Rect* interior,
-                                       bool* cut) const {
+                                       const cv::Rect* window, const cv::Rect* interior, bool* cut,
+                                       const Limits& limits) const {
   cv::Mat filtered, labels;
   cv::medianBlur(bgr, filtered, params_.filter_size_px);
   label(filtered, &labels);
@@ -283,7 +289,10 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
       cv::drawContours(alone, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
                        cv::FILLED, cv::LINE_8, cv::noArray(), INT_MAX, -bbox.tl());
       const cv::Moments mo = cv::moments(alone & m(bbox), true);
-      if (mo.m00 < c.min_area_px2 || mo.m00 > c.max_area_px2) continue;
+      if (mo.m00 < c.min_area_px2 * limits.min_area_factor ||
+          mo.m00 > c.max_area_px2 * limits.max_area_factor) {
+        continue;
+      }
       Region r;
       r.class_index = static_cast<int>(ci);
       r.area_px2 = mo.m00;
@@ -291,7 +300,7 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
       r.centroid_px = {(bbox.x + offset.x) + mo.m10 / mo.m00,
                        (bbox.y + offset.y) + mo.m01 / mo.m00};
       r.bbox = bbox + offset;
-      if (c.shape != "any") {
+      if (limits.shape && c.shape != "any") {
         const ShapeScore score = huShape(mo, templates_[ci]);
         r.shape_distance = score.distance;
         r.elongation = score.elongation;

@@ -83,6 +83,12 @@ class Detector {
   // outside; its pixels are not a full scan's).
   std::vector<Region> detectWindow(const cv::Mat& crop, const cv::Point& crop_origin,
                                    const cv::Rect& window, const cv::Size& image, bool* cut) const;
+  // Candidates in an image reduced by `scale` (a pyramid full scan's level; coordinates are the
+  // reduced image's): the same filters, the area limits divided by scale^2 and widened by
+  // kReducedAreaSlack (a small region's area shrinks more than by scale^2: its edge pixels mix
+  // with the background), no shape test (judged at full resolution in the candidate's window).
+  std::vector<Region> detectReduced(const cv::Mat& reduced_bgr, int scale) const;
+  static constexpr double kReducedAreaSlack = 2;
   // Whether a BGR colour falls in a class's HSI window (the definition the table is built from).
   static bool inClass(const ColorClass& c, uchar b, uchar g, uchar r);
   // The segmentation mask of class `index` in a (filtered) BGR image, after clean-up.
@@ -91,9 +97,14 @@ class Detector {
 
  private:
   void label(const cv::Mat& bgr, cv::Mat* labels) const;
+  // A level's tests: the classes' area limits times these factors, the shape test or none.
+  struct Limits {
+    double min_area_factor = 1, max_area_factor = 1;
+    bool shape = true;
+  };
   // detect() at offset; with a window, only regions inside *interior, *cut when one crosses it.
   std::vector<Region> detectIn(const cv::Mat& bgr, const cv::Point& offset, const cv::Rect* window,
-                               const cv::Rect* interior, bool* cut) const;
+                               const cv::Rect* interior, bool* cut, const Limits& limits) const;
   // The class's mask; *roi: the part of it that holds the class's pixels (empty: none).
   cv::Mat maskFromLabels(const cv::Mat& labels, size_t index, cv::Rect* roi) const;
 

@@ -20,9 +20,10 @@ bool decodeJpegWindow(const uint8_t* data, size_t size, int width, int height, c
   return true;
 }
 
-bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
-                       const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
-                       std::string* why) {
+namespace {
+
+// The header against the message's size and colour, before anything is allocated.
+bool checkHeader(const uint8_t* data, size_t size, int width, int height, std::string* why) {
   JpegHeader header;
   if (!readJpegHeader(data, size, &header, why)) return false;
   if (header.width != width || header.height != height || header.channels != 3) {
@@ -35,6 +36,15 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
     *why = "JPEG has " + std::to_string(header.scans) + " scans";
     return false;
   }
+  return true;
+}
+
+}  // namespace
+
+bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
+                       const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
+                       std::string* why) {
+  if (!checkHeader(data, size, width, height, why)) return false;
   if (rects.empty()) {
     *why = "no window";
     return false;
@@ -119,6 +129,59 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
   }
   jpeg_destroy_decompress(&info);  // abort, not finish: the rows below are not read
   *outs = parts;
+  return true;
+}
+
+bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, int scale,
+                       cv::Mat* out, std::string* why) {
+  if (scale != 2 && scale != 4 && scale != 8) {
+    *why = "scale " + std::to_string(scale) + " is none of 2, 4, 8";
+    return false;
+  }
+  if (!checkHeader(data, size, width, height, why)) return false;
+  // As in decodeJpegWindows: the image is declared before setjmp, libjpeg's memory is its pools.
+  cv::Mat image((height + scale - 1) / scale, (width + scale - 1) / scale, CV_8UC3);
+  jpeg_decompress_struct info{};
+  JpegError err{};
+  info.err = jpeg_std_error(&err.mgr);
+  err.mgr.error_exit = onJpegError;
+  err.mgr.emit_message = ignoreJpegMessage;
+  if (setjmp(err.jump)) {
+    jpeg_destroy_decompress(&info);
+    *why = std::string("JPEG data: ") + err.text;
+    return false;
+  }
+  jpeg_create_decompress(&info);
+  jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
+  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK) {
+    jpeg_destroy_decompress(&info);
+    *why = "JPEG header incomplete";
+    return false;
+  }
+  // cv::imdecode's settings with IMREAD_REDUCED_COLOR_<scale>.
+  info.out_color_space = JCS_EXT_BGR;
+  info.out_color_components = 3;
+  info.scale_num = 1;
+  info.scale_denom = static_cast<unsigned int>(scale);
+  jpeg_start_decompress(&info);
+  if (static_cast<int>(info.output_width) != image.cols ||
+      static_cast<int>(info.output_height) != image.rows) {
+    jpeg_destroy_decompress(&info);
+    *why = "JPEG reduced to " + std::to_string(info.output_width) + "x" +
+           std::to_string(info.output_height) + ", expected " + std::to_string(image.cols) + "x" +
+           std::to_string(image.rows);
+    return false;
+  }
+  while (info.output_scanline < info.output_height) {
+    JSAMPROW p = image.ptr(static_cast<int>(info.output_scanline));
+    if (jpeg_read_scanlines(&info, &p, 1) != 1) {
+      jpeg_destroy_decompress(&info);
+      *why = "JPEG data ends early";
+      return false;
+    }
+  }
+  jpeg_destroy_decompress(&info);  // every row read; nothing after them is needed
+  *out = image;
   return true;
 }
 

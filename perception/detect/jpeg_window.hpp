@@ -1,5 +1,6 @@
 // Decoding only a part of a JPEG (libjpeg-turbo's jpeg_crop_scanline and jpeg_skip_scanlines):
 // with a window around a tracked object ptz-detect needs a few rows and columns, not the frame.
+// Or all of it at a fraction of the size (a pyramid full scan's level), scaled in the IDCT.
 // The header is checked against the size the message claims before anything is allocated.
 #pragma once
 
@@ -23,5 +24,11 @@ bool decodeJpegWindow(const uint8_t* data, size_t size, int width, int height, c
 bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
                        const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
                        std::string* why);
+// The whole image reduced by `scale` (2, 4 or 8) in the decoder (libjpeg's scale_num 1 /
+// scale_denom: a smaller IDCT per block, so no full-size pixel is made): (width + scale - 1) /
+// scale x (height + scale - 1) / scale BGR pixels, close to the area average of a full decode.
+// The same checks; *out untouched when false.
+bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, int scale,
+                       cv::Mat* out, std::string* why);
 
 }  // namespace ptz::perception

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "perception/detect/pyramid.hpp"
+
 namespace ptz::perception {
 
 bool projectSphere(const CameraView& view, const Eigen::Vector3d& p_head, double radius_m,
@@ -82,10 +84,12 @@ std::vector<cv::Rect> mergeRects(std::vector<cv::Rect> rects) {
 
 WindowScanner::WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px)
     : p_(params), size_(image_size), margin_px_(exact_margin_px) {
-  for (const char* k : {"frames_scanned_full", "frames_scanned_windowed", "windows_grown",
-                        "windows_cut_to_full_scan", "windows_unbounded", "full_scans_disabled",
-                        "full_scans_no_tracks", "full_scans_periodic", "full_scans_behind",
-                        "full_scans_cover", "full_scans_cut"}) {
+  for (const char* k :
+       {"frames_scanned_full", "frames_scanned_windowed", "windows_grown",
+        "windows_cut_to_full_scan", "windows_unbounded", "full_scans_disabled",
+        "full_scans_no_tracks", "full_scans_periodic", "full_scans_behind", "full_scans_cover",
+        "full_scans_cut", "frames_scanned_pyramid", "pyramid_fallbacks_cut",
+        "pyramid_fallbacks_cover", "pyramid_windows_grown"}) {
     counts_[k] = 0;
   }
 }
@@ -178,10 +182,34 @@ bool WindowScanner::detectSide(const Detector& detector, const std::vector<cv::R
   return true;
 }
 
-bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const DecodeParts& left,
-                           const DecodeParts& right, std::vector<Region>* left_regions,
+std::vector<cv::Rect> WindowScanner::grow(const std::vector<cv::Rect>& windows) const {
+  std::vector<cv::Rect> grown;
+  for (const auto& w : windows) {
+    const int dx = static_cast<int>(std::ceil(w.width * (p_.grow_factor - 1) / 2));
+    const int dy = static_cast<int>(std::ceil(w.height * (p_.grow_factor - 1) / 2));
+    grown.push_back(cv::Rect(w.x - dx, w.y - dy, w.width + 2 * dx, w.height + 2 * dy) &
+                    cv::Rect(0, 0, size_.width, size_.height));
+  }
+  return mergeRects(grown);
+}
+
+bool WindowScanner::fullSide(const Detector& detector, const DecodeParts& decode,
+                             std::vector<Region>* regions, std::string* why) const {
+  std::vector<cv::Mat> image;
+  if (!decode({cv::Rect(0, 0, size_.width, size_.height)}, &image, why)) return false;
+  if (image.size() != 1 || image[0].size() != size_ || image[0].type() != CV_8UC3) {
+    *why = "the image is not the frame's size or BGR";
+    return false;
+  }
+  *regions = detector.detect(image[0]);
+  return true;
+}
+
+bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const ImagePixels& left,
+                           const ImagePixels& right, std::vector<Region>* left_regions,
                            std::vector<Region>* right_regions, std::string* why) {
-  const DecodeParts* decode[2] = {&left, &right};
+  const DecodeParts* decode[2] = {&left.parts, &right.parts};
+  const ImagePixels* pixels[2] = {&left, &right};
   std::vector<Region>* out[2] = {left_regions, right_regions};
   std::vector<cv::Rect>* windows[2] = {&plan->left, &plan->right};
   std::string errors[2];
@@ -205,14 +233,7 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Decod
       if (!cut[i]) continue;
       // An object larger than its window (closer, or zoomed in): grow the side's windows once.
       ++counts_["windows_grown"];
-      std::vector<cv::Rect> grown;
-      for (const auto& w : *windows[i]) {
-        const int dx = static_cast<int>(std::ceil(w.width * (p_.grow_factor - 1) / 2));
-        const int dy = static_cast<int>(std::ceil(w.height * (p_.grow_factor - 1) / 2));
-        grown.push_back(cv::Rect(w.x - dx, w.y - dy, w.width + 2 * dx, w.height + 2 * dy) &
-                        cv::Rect(0, 0, size_.width, size_.height));
-      }
-      *windows[i] = mergeRects(grown);
+      *windows[i] = grow(*windows[i]);
       bool still_cut = !refuse(*windows[i]).empty();
       if (!still_cut) {
         ok[i] = detectSide(detector, *windows[i], *decode[i], out[i], &cut[i], &errors[i]);
@@ -229,19 +250,29 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Decod
   if (plan->full) {
     plan->left.clear();
     plan->right.clear();
+    const int scale = pyramidScale(size_.width, p_.full_scan_max_width_px);
+    std::string fallback[2];
+    int grown[2] = {0, 0};
     both([&](int i) {
-      std::vector<cv::Mat> image;
-      ok[i] = (*decode[i])({cv::Rect(0, 0, size_.width, size_.height)}, &image, &errors[i]);
-      if (ok[i] && (image.size() != 1 || image[0].size() != size_ || image[0].type() != CV_8UC3)) {
-        errors[i] = "the image is not the frame's size or BGR";
-        ok[i] = false;
+      if (scale > 1) {
+        ok[i] =
+            pyramidSide(detector, scale, *pixels[i], out[i], &fallback[i], &grown[i], &errors[i]);
+        if (!ok[i] || fallback[i].empty()) return;
       }
-      if (!ok[i]) return;
-      *out[i] = detector.detect(image[0]);
+      ok[i] = fullSide(detector, *decode[i], out[i], &errors[i]);
     });
     if (failed()) return false;
     ++counts_["frames_scanned_full"];
     ++counts_["full_scans_" + plan->reason];
+    if (scale > 1) {
+      counts_["pyramid_windows_grown"] += grown[0] + grown[1];
+      plan->pyramid = fallback[0].empty() && fallback[1].empty();
+      // One reason a frame: cut before cover.
+      const std::string reason = fallback[0] == "cut" || fallback[1] == "cut" ? "cut"
+                                 : fallback[0].empty()                        ? fallback[1]
+                                                                              : fallback[0];
+      ++counts_[plan->pyramid ? "frames_scanned_pyramid" : "pyramid_fallbacks_" + reason];
+    }
     since_full_ = 0;
   } else {
     ++counts_["frames_scanned_windowed"];

@@ -3,7 +3,9 @@
 // every few frames (and whenever a window could miss its object) for new objects. A window's
 // regions are those of a full scan: the detector works on a crop with enough margin for its
 // filters, and keeps only regions strictly inside the window. A window across the image's border
-// is cut to the image (the image's edge is exact).
+// is cut to the image (the image's edge is exact). A full scan of a wide image finds its objects on
+// the image reduced by a power of two and detects at full resolution in windows around them
+// (pyramid.hpp).
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -11,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/rig.hpp"
@@ -26,6 +29,9 @@ struct WindowParams {
   double sigma_scale = 3;           // k: the track's radius plus k sigma of its position covariance
   double max_cover_fraction = 0.5;  // windows covering more of an image than this: full scan
   double grow_factor = 2;           // a window whose region crosses its edge grows by this, once
+  // Full scans of images wider than this go through the image reduced by 2, 4 or 8 to this width
+  // or less (pyramid.hpp); 0: every full scan at full resolution.
+  int full_scan_max_width_px = 960;
 };
 
 // The image rectangle of a sphere of radius_m around p_head (all of it, distortion included,
@@ -49,7 +55,8 @@ std::vector<cv::Rect> mergeRects(std::vector<cv::Rect> rects);
 // What a frame scans: the whole of both images, or windows in each.
 struct ScanPlan {
   bool full = true;
-  std::string reason;  // why full: disabled, no_tracks, periodic, behind, cover, cut
+  std::string reason;    // why full: disabled, no_tracks, periodic, behind, cover, cut
+  bool pyramid = false;  // a full scan done in both images through the reduced image
   std::vector<cv::Rect> left, right;
   int unbounded = 0;  // coasting tracks whose window is unbounded, left to the periodic scan
 };
@@ -58,6 +65,16 @@ struct ScanPlan {
 // (*parts)[i] those of rects[i].
 using DecodeParts = std::function<bool(const std::vector<cv::Rect>& rects,
                                        std::vector<cv::Mat>* parts, std::string* why)>;
+// A camera's whole image reduced by `scale` (2, 4 or 8) to reducedSize(), as 8-bit BGR.
+using DecodeReduced = std::function<bool(int scale, cv::Mat* reduced, std::string* why)>;
+// A camera's pixels: parts at full resolution, and the whole image reduced (when empty: the whole
+// image from `parts`, reduced by cv::resize INTER_AREA). Implicit: parts alone will do.
+struct ImagePixels {
+  ImagePixels(DecodeParts parts_at_full, DecodeReduced reduced_whole = {})
+      : parts(std::move(parts_at_full)), reduced(std::move(reduced_whole)) {}
+  DecodeParts parts;
+  DecodeReduced reduced;
+};
 
 class WindowScanner {
  public:
@@ -71,14 +88,17 @@ class WindowScanner {
 
   // Detects in one frame as planned, both sides on two cores: the whole images, or the windows
   // (a window whose region crosses its edge grows once; still crossing, or grown beyond the
-  // image or the cover limit: the frame is scanned whole). False when a decode fails (*why).
-  bool detect(const Detector& detector, ScanPlan* plan, const DecodeParts& left,
-              const DecodeParts& right, std::vector<Region>* left_regions,
+  // image or the cover limit: the frame is scanned whole). A full scan of an image wider than
+  // full_scan_max_width_px goes through the pyramid (the same regions; pyramid.hpp). False when
+  // a decode fails (*why).
+  bool detect(const Detector& detector, ScanPlan* plan, const ImagePixels& left,
+              const ImagePixels& right, std::vector<Region>* left_regions,
               std::vector<Region>* right_regions, std::string* why);
 
   // frames_scanned_full, frames_scanned_windowed, full_scans_<reason>, windows_grown,
   // windows_cut_to_full_scan, windows_unbounded (coasting tracks left to the periodic scan in
-  // windowed frames), since the start.
+  // windowed frames); of the full scans frames_scanned_pyramid, pyramid_fallbacks_<reason> (cut,
+  // cover: an image then scanned at full resolution), pyramid_windows_grown; since the start.
   const std::map<std::string, int64_t>& counts() const { return counts_; }
   const WindowParams& params() const { return p_; }
 
@@ -89,6 +109,17 @@ class WindowScanner {
   bool detectSide(const Detector& detector, const std::vector<cv::Rect>& windows,
                   const DecodeParts& decode, std::vector<Region>* regions, bool* cut,
                   std::string* why) const;
+  // Windows grown by grow_factor about their centres, cut to the image, merged.
+  std::vector<cv::Rect> grow(const std::vector<cv::Rect>& windows) const;
+  // The whole image at full resolution.
+  bool fullSide(const Detector& detector, const DecodeParts& decode, std::vector<Region>* regions,
+                std::string* why) const;
+  // A full scan through the image reduced by `scale` (pyramid.cpp); *fallback names why the image
+  // must be scanned at full resolution instead ("" when its regions are found), *grown counts
+  // window growths.
+  bool pyramidSide(const Detector& detector, int scale, const ImagePixels& pixels,
+                   std::vector<Region>* regions, std::string* fallback, int* grown,
+                   std::string* why) const;
 
   WindowParams p_;
   cv::Size size_;

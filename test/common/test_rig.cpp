@@ -151,6 +151,26 @@ TEST(Rig, ZoomTableInterpolatesLinearly) {
   EXPECT_DOUBLE_EQ(rig.left.intrinsicsAt(20).fx, rig.left.intrinsicsAt(10).fx);
 }
 
+// A point's pixel at 1080p is its VGA pixel scaled by 3 about pixel centres, less the 180 rows
+// that 16:9 crops from 4:3 at the top (1440 rows scaled, 1080 kept).
+TEST(Rig, AtAnotherSizeAPointLandsOnTheScaledPixel) {
+  const StereoRig vga = StereoRig::makeDefault();
+  const StereoRig hd = vga.atSize(1920, 1080);
+  EXPECT_EQ(hd.left.width, 1920);
+  EXPECT_EQ(hd.right.height, 1080);
+  const PtzPose pose{0.1, -0.05, 3.0};
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    for (const Eigen::Vector3d& p :
+         {Eigen::Vector3d(0.2, -0.1, 4.0), Eigen::Vector3d(-1, 0.5, 6)}) {
+      const Eigen::Vector2d a = vga.view(side, pose).project(p);
+      const Eigen::Vector2d b = hd.view(side, pose).project(p);
+      EXPECT_NEAR(b.x(), (a.x() + 0.5) * 3 - 0.5, 1e-9);
+      EXPECT_NEAR(b.y(), (a.y() + 0.5) * 3 - 0.5 - 180, 1e-9);
+    }
+  }
+  EXPECT_NEAR(hd.baselineM(), vga.baselineM(), 0);
+}
+
 TEST(RigFile, RoundTrip) {
   const StereoRig rig = StereoRig::makeDefault();
   const std::string path = tempPath("rig_roundtrip.yaml");

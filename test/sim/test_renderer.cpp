@@ -190,3 +190,118 @@ TEST(Renderer, VisibleFractionsAreTheSharesNoNearerObjectHides) {
   renderer.render(view, 0.0, &img, &fraction);
   EXPECT_DOUBLE_EQ(fraction[0], 0.0);
 }
+
+namespace {
+
+// The default scenario with more to get wrong across bands: a textured box in front of the red
+// ball's path, a large sphere cut by the image's left edge, a chessboard (its rays read the rows
+// around each pixel) and the default objects behind them.
+Scene crowdedScene() {
+  cv::FileStorage fs(PTZ_SOURCE_DIR "/config/sim_default.yaml", cv::FileStorage::READ);
+  Scene scene = Scene::fromConfig(fs["scene"], fs["objects"], fs["chessboard"], "sim_default");
+  SceneObject box;
+  box.name = "front_box";
+  box.shape = SceneObject::Shape::kBox;
+  box.half_extents_m = {0.25, 0.2, 0.1};
+  box.yaw_rad = 0.4;
+  box.yaw_rate_rad_s = 0.3;
+  box.textured = true;
+  box.color_bgr = {40, 200, 200};
+  box.trajectory.centre_m = {0.3, 0.1, 2.0};
+  scene.objects.push_back(box);
+  SceneObject edge;
+  edge.name = "edge_ball";
+  edge.radius_m = 0.5;
+  edge.textured = true;
+  edge.color_bgr = {200, 40, 200};
+  edge.trajectory.centre_m = {-2.2, -0.2, 3.5};
+  scene.objects.push_back(edge);
+  scene.chessboard.present = true;
+  scene.chessboard.square_m = 0.03;
+  scene.chessboard.centre_head_m = {0.9, -0.5, 3.0};
+  scene.chessboard.rotation_head_board =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.3, 1, 0).normalized()).toRotationMatrix();
+  return scene;
+}
+
+// Restores OpenCV's thread count however the test ends.
+struct ThreadCountGuard {
+  int threads = cv::getNumThreads();
+  ~ThreadCountGuard() { cv::setNumThreads(threads); }
+};
+
+}  // namespace
+
+// Lockstep runs depend on it: rendering on all threads, in any number of bands, writes the same
+// bytes as one thread in one band, and the same visible fractions to the last bit; and so does
+// a background kept from the frame before.
+TEST(Renderer, BandsAndThreadsGiveByteIdenticalImagesAndFractions) {
+  const ThreadCountGuard guard;
+  const Scene scene = crowdedScene();
+  struct Shot {
+    double t_s;
+    PtzPose pose;
+  };
+  // Home (the chessboard and the cut sphere in view), panned and zoomed (objects cut by the
+  // borders), the same pose three times (its background drawn, kept, reused) and tilted down.
+  const std::vector<Shot> shots = {{0.0, {0, 0, 1}},           {4.0, {0.25, 0.08, 1.8}},
+                                   {4.5, {0.25, 0.08, 1.8}},   {5.0, {0.25, 0.08, 1.8}},
+                                   {9.0, {-0.35, -0.05, 3.0}}, {12.0, {0.1, 0.3, 1.3}}};
+  bool partly_hidden = false;
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(1920, 1080)}) {
+    const StereoRig rig = StereoRig::makeDefault().atSize(size.width, size.height);
+    // The reference renders both cameras in turn, so it draws every background afresh.
+    Renderer reference(scene);
+    reference.setBands(1);
+    std::vector<Renderer> threaded(2, Renderer(scene)), odd_bands(2, Renderer(scene));
+    for (Renderer& r : odd_bands) r.setBands(7);
+    for (const Shot& shot : shots) {
+      for (Side side : {Side::kLeft, Side::kRight}) {
+        const ptz::CameraView view = rig.view(side, shot.pose);
+        cv::Mat expected, image;
+        std::vector<double> expected_fraction, fraction;
+        cv::setNumThreads(1);
+        reference.render(view, shot.t_s, &expected, &expected_fraction);
+        cv::setNumThreads(guard.threads);
+        const std::string what = std::to_string(size.width) + "x" + std::to_string(size.height) +
+                                 " " + ptz::sideName(side) + " t " + std::to_string(shot.t_s);
+        const auto camera = static_cast<size_t>(side);
+        for (Renderer* renderer : {&threaded[camera], &odd_bands[camera]}) {
+          renderer->render(view, shot.t_s, &image, &fraction);
+          ASSERT_EQ(cv::norm(expected, image, cv::NORM_INF), 0) << what;
+          ASSERT_EQ(fraction.size(), expected_fraction.size());
+          for (size_t i = 0; i < fraction.size(); ++i) {
+            EXPECT_EQ(fraction[i], expected_fraction[i]) << what << " object " << i;
+            partly_hidden = partly_hidden || (fraction[i] > 0 && fraction[i] < 1);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(partly_hidden) << "no object was partly hidden: the scene tests too little";
+}
+
+// The whole capture (both cameras and their noise) is the same on one thread and on all.
+TEST(Simulator, CapturesAreByteIdenticalOnOneThreadAndOnAll) {
+  const ThreadCountGuard guard;
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(1920, 1080)}) {
+    const StereoRig rig = StereoRig::makeDefault().atSize(size.width, size.height);
+    ptz::sim::Simulator one(rig, crowdedScene(), ptz::defaultPlantParams(), 2.0, 3);
+    ptz::sim::Simulator all(rig, crowdedScene(), ptz::defaultPlantParams(), 2.0, 3);
+    for (int i = 0; i < 3; ++i) {
+      for (ptz::sim::Simulator* sim : {&one, &all}) {
+        int clamped = 0, rejected = 0;
+        sim->command(i * 0.5, {0.2 * i, 0.05, 1.0 + i}, {0.2 * i - 0.02, 0.05, 1.0 + i}, &clamped,
+                     &rejected);
+        sim->advanceTo(i * 0.5 + 0.3);
+      }
+      cv::setNumThreads(1);
+      const ptz::sim::SimFrame a = one.capture();
+      cv::setNumThreads(guard.threads);
+      const ptz::sim::SimFrame b = all.capture();
+      EXPECT_EQ(cv::norm(a.left, b.left, cv::NORM_INF), 0) << size << " frame " << i;
+      EXPECT_EQ(cv::norm(a.right, b.right, cv::NORM_INF), 0) << size << " frame " << i;
+      EXPECT_EQ(a.visible_fraction, b.visible_fraction) << size << " frame " << i;
+    }
+  }
+}

@@ -8,6 +8,7 @@
 #include <deque>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
 
 #include "common/measure.hpp"
 #include "common/message_check.hpp"
@@ -38,16 +39,39 @@ json point2(double x, double y) {
   return {{"x", x}, {"y", y}};
 }
 
-std::string base64(const void* data, size_t size) {
-  gchar* text = g_base64_encode(static_cast<const guchar*>(data), size);
-  std::string out(text);
-  g_free(text);
-  return out;
+// The most characters g_base64_encode_step and g_base64_encode_close write for size bytes.
+constexpr size_t base64MaxChars(size_t size) {
+  return (size / 3 + 1) * 4 + 4;
 }
 
-int64_t saturatingNs(int64_t utime) {
-  int64_t ns;
-  return __builtin_mul_overflow(std::max<int64_t>(utime, 0), 1000, &ns) ? INT64_MAX : ns;
+// Appends the base64 of size bytes to text, encoded in place (no intermediate copy).
+void appendBase64(std::string* text, const void* data, size_t size) {
+  const size_t at = text->size();
+  text->resize(at + base64MaxChars(size));
+  gint state = 0, save = 0;
+  char* out = text->data() + at;
+  gsize n = g_base64_encode_step(static_cast<const guchar*>(data), size, FALSE, out, &state, &save);
+  n += g_base64_encode_close(FALSE, out + n, &state, &save);
+  text->resize(at + n);
+}
+
+// j.dump() with the bytes, base64, as j["data"]. The base64 is written straight into the text:
+// the serializer's escaping would walk every character of the message's largest field, where
+// base64 has nothing to escape. "data" is the first of j's keys (they are sorted).
+std::string dumpWithBase64Data(json j, const void* data, size_t size) {
+  j["data"] = "";
+  const std::string without = dumpJson(j);
+  constexpr char kHead[] = R"({"data":")";
+  constexpr size_t kHeadChars = sizeof kHead - 1;
+  if (without.compare(0, kHeadChars + 1, R"({"data":"")") != 0) {
+    throw std::logic_error("dumpWithBase64Data: \"data\" is not the first key of " + without);
+  }
+  std::string text;
+  text.reserve(without.size() + base64MaxChars(size));
+  text.append(without, 0, kHeadChars);
+  appendBase64(&text, data, size);
+  text.append(without, kHeadChars, std::string::npos);
+  return text;
 }
 
 // The world frame of the 3D view: z up, x forward (the head's home optical axis), y left.
@@ -114,7 +138,7 @@ struct Converter::Impl {
   }
 
   int addTopic(const std::string& name, const std::string& schema_name, const json& schema) {
-    topics.push_back({name, schema_name, schema.dump()});
+    topics.push_back({name, schema_name, dumpJson(schema)});
     topic_index[name] = static_cast<int>(topics.size()) - 1;
     return topic_index[name];
   }
@@ -128,7 +152,11 @@ struct Converter::Impl {
 
   Message message(const std::string& name, int64_t receive_utime, int64_t data_utime,
                   const json& j) const {
-    return {topic(name), saturatingNs(receive_utime), saturatingNs(data_utime), j.dump()};
+    return textMessage(name, receive_utime, data_utime, dumpJson(j));
+  }
+  Message textMessage(const std::string& name, int64_t receive_utime, int64_t data_utime,
+                      std::string json_text) const {
+    return {topic(name), utimeToNs(receive_utime), utimeToNs(data_utime), std::move(json_text)};
   }
 
   template <class Msg>
@@ -193,33 +221,31 @@ struct Converter::Impl {
             {"P", {fx, 0, cx, 0, 0, fy, cy, 0, 0, 0, 1, 0}}};
   }
 
-  // The image as JPEG of at most max_width_px; its width ratio in *scale. False: undecodable.
-  bool jpegOf(const ptzstereo::image_t& image, std::string* jpeg, double* scale, int* width,
-              int* height) const {
+  // The image as JPEG of at most max_width_px: its own bytes, or *encoded; its width ratio in
+  // *scale. Null: undecodable.
+  const std::vector<uint8_t>* jpegOf(const ptzstereo::image_t& image, std::vector<uint8_t>* encoded,
+                                     double* scale, int* width, int* height) const {
     const int max_width = options.image_max_width_px;
     *scale = 1;
     *width = image.width;
     *height = image.height;
     if (image.encoding == ptzstereo::image_t::ENCODING_JPEG &&
         (max_width <= 0 || image.width <= max_width)) {
-      jpeg->assign(image.data.begin(), image.data.end());
-      return true;
+      return &image.data;
     }
     cv::Mat pixels;
     std::string error;
-    if (!decodeImage(image, &pixels, &error)) return false;
+    if (!decodeImage(image, &pixels, &error)) return nullptr;
     if (max_width > 0 && pixels.cols > max_width) {
       *scale = static_cast<double>(max_width) / pixels.cols;
       *width = max_width;
       *height = std::max(1, static_cast<int>(std::lround(pixels.rows * *scale)));
       cv::resize(pixels, pixels, cv::Size(*width, *height), 0, 0, cv::INTER_AREA);
     }
-    std::vector<uchar> out;
-    if (!cv::imencode(".jpg", pixels, out, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
-      return false;
+    if (!cv::imencode(".jpg", pixels, *encoded, {cv::IMWRITE_JPEG_QUALITY, options.jpeg_quality})) {
+      return nullptr;
     }
-    jpeg->assign(out.begin(), out.end());
-    return true;
+    return encoded;
   }
 
   void frame(const std::string& channel, const ptzstereo::stereo_frame_t& m, int64_t receive_utime,
@@ -239,18 +265,19 @@ struct Converter::Impl {
     for (int i = 0; i < 2; ++i) {
       const Side side = static_cast<Side>(i);
       const ptzstereo::image_t& image = i == 0 ? m.left : m.right;
-      std::string jpeg;
+      std::vector<uint8_t> encoded;
       int width = 0, height = 0;
-      if (!jpegOf(image, &jpeg, &scales[i], &width, &height)) {
+      const std::vector<uint8_t>* jpeg = jpegOf(image, &encoded, &scales[i], &width, &height);
+      if (!jpeg) {
         countDrop(channel, "undecodable image");
         return;
       }
       const std::string s = prefix + kSides[i];
-      out->push_back(message(s + "/image", receive_utime, m.utime,
-                             {{"timestamp", stamp(m.utime)},
-                              {"frame_id", std::string(kSides[i]) + "_camera"},
-                              {"data", base64(jpeg.data(), jpeg.size())},
-                              {"format", "jpeg"}}));
+      const json others = {{"timestamp", stamp(m.utime)},
+                           {"frame_id", std::string(kSides[i]) + "_camera"},
+                           {"format", "jpeg"}};
+      out->push_back(textMessage(s + "/image", receive_utime, m.utime,
+                                 dumpWithBase64Data(others, jpeg->data(), jpeg->size())));
       // A preview is smaller than the rig's images: its calibration is scaled to it.
       out->push_back(message(s + "/camera_info", receive_utime, m.utime,
                              calibration(side, m.utime, image.zoom, width, height)));
@@ -301,8 +328,9 @@ struct Converter::Impl {
     }
   }
 
-  // A foxglove.PointCloud of a POINT_CLOUD (PCL's layout), rows packed. False: inconsistent.
-  bool cloud(const ptzstereo::point_cloud_t& m, json* j) const {
+  // A foxglove.PointCloud of a POINT_CLOUD (PCL's layout), rows packed, as JSON text. False:
+  // inconsistent.
+  bool cloud(const ptzstereo::point_cloud_t& m, std::string* json_text) const {
     if (m.width < 0 || m.height < 0 || m.point_step <= 0 || m.row_step < 0 || m.is_bigendian) {
       return false;
     }
@@ -324,21 +352,26 @@ struct Converter::Impl {
       const int type = f.name == "rgb" && f.datatype == 7 ? fg::kUint32 : kType[f.datatype];
       fields.push_back({{"name", printable(f.name, 40)}, {"offset", f.offset}, {"type", type}});
     }
+    // Rows without padding between them (PCL's usual layout) are packed already.
+    const size_t row_bytes = static_cast<size_t>(m.width) * m.point_step;
+    const void* data = m.data.data();
     std::string packed;
-    packed.reserve(static_cast<size_t>(points * m.point_step));
-    for (int32_t row = 0; row < m.height; ++row) {
-      const auto* begin = m.data.data() + static_cast<size_t>(row) * m.row_step;
-      packed.append(reinterpret_cast<const char*>(begin),
-                    static_cast<size_t>(m.width) * m.point_step);
+    if (static_cast<size_t>(m.row_step) != row_bytes) {
+      packed.reserve(static_cast<size_t>(points * m.point_step));
+      for (int32_t row = 0; row < m.height; ++row) {
+        const auto* begin = m.data.data() + static_cast<size_t>(row) * m.row_step;
+        packed.append(reinterpret_cast<const char*>(begin), row_bytes);
+      }
+      data = packed.data();
     }
-    *j = {{"timestamp", stamp(m.utime)},
-          {"frame_id", "head"},
-          {"pose",
-           {{"position", vec3(Eigen::Vector3d::Zero())},
-            {"orientation", quat(Eigen::Quaterniond::Identity())}}},
-          {"point_stride", m.point_step},
-          {"fields", fields},
-          {"data", base64(packed.data(), packed.size())}};
+    const json others = {{"timestamp", stamp(m.utime)},
+                         {"frame_id", "head"},
+                         {"pose",
+                          {{"position", vec3(Eigen::Vector3d::Zero())},
+                           {"orientation", quat(Eigen::Quaterniond::Identity())}}},
+                         {"point_stride", m.point_step},
+                         {"fields", fields}};
+    *json_text = dumpWithBase64Data(others, data, static_cast<size_t>(points * m.point_step));
     return true;
   }
 
@@ -451,6 +484,11 @@ struct Converter::Impl {
   }
 };
 
+int64_t utimeToNs(int64_t utime) {
+  int64_t ns;
+  return __builtin_mul_overflow(std::max<int64_t>(utime, 0), 1000, &ns) ? INT64_MAX : ns;
+}
+
 Converter::Converter(StereoRig rig, ConvertOptions options)
     : impl_(std::make_unique<Impl>(std::move(rig), options)) {}
 Converter::~Converter() = default;
@@ -479,8 +517,11 @@ std::vector<Message> Converter::convert(const std::string& prefixed, const void*
     return out;
   }
   const std::string channel = prefixed.substr(prefix.size());
-  const auto raw = [&](const char* topic, const auto& m) {
-    out.push_back(d.message(topic, receive_utime, m.utime, toJson(m)));
+  // Decodes *m and converts it field for field to topic; false when it does not decode.
+  const auto decodeRaw = [&](auto* m, const char* topic) {
+    if (!d.decode(channel, data, size, m)) return false;
+    out.push_back(d.message(topic, receive_utime, m->utime, toJson(*m)));
+    return true;
   };
   if (channel == ch::kStereoFrame || channel == ch::kStereoPreview) {
     ptzstereo::stereo_frame_t m;
@@ -488,53 +529,45 @@ std::vector<Message> Converter::convert(const std::string& prefixed, const void*
     d.frame(channel, m, receive_utime, channel == ch::kStereoPreview, &out);
   } else if (channel == ch::kPtzState) {
     ptzstereo::ptz_state_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/ptz_state", m);
+    if (!decodeRaw(&m, "/ptz_state")) return out;
     const double pan_tilt[2][2] = {{m.left.pan_rad, m.left.tilt_rad},
                                    {m.right.pan_rad, m.right.tilt_rad}};
     out.push_back(d.message("/tf", receive_utime, m.utime, d.transforms(m.utime, pan_tilt)));
   } else if (channel == ch::kPtzSetpoint) {
     ptzstereo::ptz_setpoint_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/ptz_setpoint", m);
+    decodeRaw(&m, "/ptz_setpoint");
   } else if (channel == ch::kControlState) {
     ptzstereo::control_state_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/control_state", m);
+    decodeRaw(&m, "/control_state");
   } else if (channel == ch::kObjectDetections) {
     ptzstereo::object_detections_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/object_detections", m);
-    d.detections(m, receive_utime, &out);
+    if (decodeRaw(&m, "/object_detections")) d.detections(m, receive_utime, &out);
   } else if (channel == ch::kObjectPose) {
     ptzstereo::object_pose_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/object_pose", m);
+    decodeRaw(&m, "/object_pose");
   } else if (channel == ch::kObjectTracks) {
     ptzstereo::object_tracks_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/object_tracks", m);
+    if (!decodeRaw(&m, "/object_tracks")) return out;
     out.push_back(d.message("/objects", receive_utime, m.utime, d.trackScene(m)));
   } else if (channel == ch::kSimTruth) {
     ptzstereo::sim_truth_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/sim_truth", m);
+    if (!decodeRaw(&m, "/sim_truth")) return out;
     out.push_back(d.message("/truth", receive_utime, m.utime, d.truthScene(m)));
   } else if (channel == ch::kTargetSelect) {
     ptzstereo::target_select_t m;
-    if (!d.decode(channel, data, size, &m)) return out;
-    raw("/target_select", m);
+    decodeRaw(&m, "/target_select");
   } else if (channel == ch::kPointCloud || channel == ch::kPointCloudPreview) {
     ptzstereo::point_cloud_t m;
     if (!d.decode(channel, data, size, &m)) return out;
     const bool preview = channel == ch::kPointCloudPreview;
     if (!preview && d.cloud_schedule.enabled() && !d.cloud_schedule.take(m.utime)) return out;
-    json j;
-    if (!d.cloud(m, &j)) {
+    std::string text;
+    if (!d.cloud(m, &text)) {
       d.countDrop(channel, "inconsistent cloud");
       return out;
     }
-    out.push_back(d.message(preview ? "/cloud_preview" : "/cloud", receive_utime, m.utime, j));
+    out.push_back(d.textMessage(preview ? "/cloud_preview" : "/cloud", receive_utime, m.utime,
+                                std::move(text)));
   } else if (channel.rfind(ch::kProcessStatusPrefix, 0) == 0) {
     ptzstereo::process_status_t m;
     if (!d.decode(channel, data, size, &m)) return out;

@@ -43,6 +43,10 @@ struct ConvertOptions {
   std::string channel_prefix;
 };
 
+// Microseconds as the nanoseconds of MCAP and the Foxglove WebSocket protocol: negative ones as 0,
+// too large ones as INT64_MAX.
+int64_t utimeToNs(int64_t utime);
+
 class Converter {
  public:
   Converter(StereoRig rig, ConvertOptions options);

@@ -239,4 +239,8 @@ json schemaOf(const json& sample, const std::string& title, const std::vector<st
   return s;
 }
 
+std::string dumpJson(const json& j) {
+  return j.dump(-1, ' ', false, json::error_handler_t::replace);
+}
+
 }  // namespace ptz::foxglove

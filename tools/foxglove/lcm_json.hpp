@@ -35,4 +35,8 @@ nlohmann::json toJson(const ptzstereo::process_status_t& m);
 nlohmann::json schemaOf(const nlohmann::json& sample, const std::string& title,
                         const std::vector<std::string>& maps = {});
 
+// JSON text whose strings are valid UTF-8 whatever bytes the message's strings held (invalid
+// bytes become U+FFFD): nlohmann's plain dump() throws on them, and LCM strings are any bytes.
+std::string dumpJson(const nlohmann::json& j);
+
 }  // namespace ptz::foxglove

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/transport.hpp"
@@ -27,7 +28,7 @@ void declare(Params& p) {
         "127.0.0.1 this host only");
   p.add("port", 8765, "", "TCP port of the WebSocket server (Foxglove's default 8765)",
         Range::between(1, 65535));
-  p.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(p);
   p.add("image_rate_hz", 10.0, "Hz", "images (and their calibrations) at most this often (0: all)",
         Range::between(0, 1000));
   p.add("image_max_width_px", 640, "px", "wider images are scaled down, JPEG (0: as they are)",
@@ -181,12 +182,14 @@ class BridgeNode {
     }
     // The converter knows the contract's names; the prefix only selects this rig's channels.
     const std::string name = channel.substr(prefix_.size());
-    const auto out = converter_.convert(name, m.bytes.data(), m.bytes.size(), m.receive_utime);
+    auto out = converter_.convert(name, m.bytes.data(), m.bytes.size(), m.receive_utime);
     advertiseNewTopics();
-    for (const auto& msg : out) {
+    for (auto& msg : out) {
       if (msg.topic < 0 || static_cast<size_t>(msg.topic) >= channel_ids_.size()) continue;
+      // Moved: an image's JSON is its JPEG in base64, not copied once more.
       server_.publish(channel_ids_[static_cast<size_t>(msg.topic)],
-                      static_cast<uint64_t>(std::max<int64_t>(msg.log_time_ns, 0)), msg.json);
+                      static_cast<uint64_t>(std::max<int64_t>(msg.log_time_ns, 0)),
+                      std::move(msg.json));
     }
     status_.increment("messages_converted", static_cast<int64_t>(out.size()));
   }

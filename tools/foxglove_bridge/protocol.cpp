@@ -44,6 +44,18 @@ void capProblems(HandleResult* r) {
   r->problems = std::move(kept);
 }
 
+// A client's id: a u32 (never negative here), or false and a problem naming where it was.
+bool readU32(const json& v, const std::string& where, uint32_t* out, HandleResult* r) {
+  const bool ok = v.is_number_unsigned() || (v.is_number_integer() && v.get<int64_t>() >= 0);
+  if (!ok || v.get<uint64_t>() > std::numeric_limits<uint32_t>::max()) {
+    addProblem(r, StatusLevel::kError, "bad_field",
+               where + " = " + shown(v) + ": not an integer 0 .. 4294967295");
+    return false;
+  }
+  *out = static_cast<uint32_t>(v.get<uint64_t>());
+  return true;
+}
+
 // A u32 field of a client object, or a problem naming it.
 bool readId(const json& object, const char* field, const std::string& where, uint32_t* out,
             HandleResult* r) {
@@ -52,15 +64,18 @@ bool readId(const json& object, const char* field, const std::string& where, uin
     addProblem(r, StatusLevel::kError, "bad_field", where + "." + field + ": missing");
     return false;
   }
-  const bool ok = it->is_number_unsigned() ||
-                  (it->is_number_integer() && it->get<int64_t>() >= 0);  // never negative here
-  if (!ok || it->get<uint64_t>() > std::numeric_limits<uint32_t>::max()) {
-    addProblem(r, StatusLevel::kError, "bad_field",
-               where + "." + field + " = " + shown(*it) + ": not an integer 0 .. 4294967295");
-    return false;
-  }
-  *out = static_cast<uint32_t>(it->get<uint64_t>());
-  return true;
+  return readU32(*it, where + "." + field, out, r);
+}
+
+// The array op[field], or null and a problem naming it and what it must be.
+const json* readArray(const json& op, const char* op_name, const char* field, const char* must_be,
+                      HandleResult* r) {
+  const auto it = op.find(field);
+  if (it != op.end() && it->is_array()) return &*it;
+  addProblem(r, StatusLevel::kError, "bad_field",
+             std::string(op_name) + ": " + field + " = " +
+                 (it == op.end() ? std::string("(missing)") : shown(*it)) + ": must be " + must_be);
+  return nullptr;
 }
 
 const std::set<std::string>& unsupportedOps() {
@@ -193,14 +208,8 @@ HandleResult ClientSubscriptions::handleBinary(std::string_view bytes) const {
 
 void ClientSubscriptions::subscribe(const json& j, HandleResult* r,
                                     const std::function<bool(uint32_t)>& advertised) {
-  const auto list = j.find("subscriptions");
-  if (list == j.end() || !list->is_array()) {
-    addProblem(r, StatusLevel::kError, "bad_field",
-               "subscribe: subscriptions = " +
-                   (list == j.end() ? std::string("(missing)") : shown(*list)) +
-                   ": must be an array of {id, channelId}");
-    return;
-  }
+  const json* list = readArray(j, "subscribe", "subscriptions", "an array of {id, channelId}", r);
+  if (!list) return;
   for (size_t i = 0; i < list->size(); ++i) {
     const json& s = (*list)[i];
     const std::string where = "subscribe: subscriptions[" + std::to_string(i) + "]";
@@ -244,24 +253,13 @@ void ClientSubscriptions::subscribe(const json& j, HandleResult* r,
 }
 
 void ClientSubscriptions::unsubscribe(const json& j, HandleResult* r) {
-  const auto list = j.find("subscriptionIds");
-  if (list == j.end() || !list->is_array()) {
-    addProblem(r, StatusLevel::kError, "bad_field",
-               "unsubscribe: subscriptionIds = " +
-                   (list == j.end() ? std::string("(missing)") : shown(*list)) +
-                   ": must be an array of subscription ids");
-    return;
-  }
+  const json* list =
+      readArray(j, "unsubscribe", "subscriptionIds", "an array of subscription ids", r);
+  if (!list) return;
   for (size_t i = 0; i < list->size(); ++i) {
-    const json& v = (*list)[i];
     const std::string where = "unsubscribe: subscriptionIds[" + std::to_string(i) + "]";
-    const bool ok = v.is_number_unsigned() || (v.is_number_integer() && v.get<int64_t>() >= 0);
-    if (!ok || v.get<uint64_t>() > std::numeric_limits<uint32_t>::max()) {
-      addProblem(r, StatusLevel::kError, "bad_field",
-                 where + " = " + shown(v) + ": not an integer 0 .. 4294967295");
-      continue;
-    }
-    const auto id = static_cast<uint32_t>(v.get<uint64_t>());
+    uint32_t id = 0;
+    if (!readU32((*list)[i], where, &id, r)) continue;
     const auto it = channel_of_.find(id);
     if (it == channel_of_.end()) {
       addProblem(r, StatusLevel::kWarning, "unknown_subscription",

@@ -16,6 +16,7 @@ namespace {
 
 // A share of an object's pixels that counts as all of them (antialiased edges, rounding).
 constexpr double kFullyVisible = 0.98;
+constexpr double kVgaWidthPx = 640;
 
 CameraView toView(const ptzstereo::camera_model_t& m) {
   CameraView v;
@@ -47,8 +48,10 @@ bool offsetFromCentre(const CameraView& v, const Eigen::Vector3d& p, double* dx,
   *inside = distorted.allFinite() && within(distorted, 0) && within(pinhole, 0.5);
   const Eigen::Vector2d& px = *inside ? distorted : pinhole;
   if (!px.allFinite()) return false;
-  *dx = px.x() - (v.width - 1) / 2.0;
-  *dy = px.y() - (v.height - 1) / 2.0;
+  // VGA-equivalent px: the same share of the image at every resolution.
+  const double to_vga = kVgaWidthPx / v.width;
+  *dx = (px.x() - (v.width - 1) / 2.0) * to_vga;
+  *dy = (px.y() - (v.height - 1) / 2.0) * to_vga;
   return true;
 }
 

@@ -34,7 +34,8 @@ struct RunSummary {
   double delay_ms_p99 = NAN;
   double phase_margin_deg = NAN;
   // The tracked true object to the image centre, both cameras, after settle_s; frames where it
-  // is behind either camera are left out (and counted outside the image).
+  // is behind either camera are left out (and counted outside the image). In VGA-equivalent px
+  // (scaled by 640 / width), so runs at every resolution compare.
   double centering_rms_px = NAN;
   double centering_max_px = NAN;
   int64_t frames_target_outside_image = 0;  // after settle_s, either camera (or behind it)

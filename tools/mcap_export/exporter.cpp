@@ -9,14 +9,6 @@
 #include "tools/foxglove/lcm_json.hpp"
 
 namespace ptz::tools {
-namespace {
-
-int64_t toNs(int64_t utime) {
-  int64_t ns;
-  return __builtin_mul_overflow(std::max<int64_t>(utime, 0), 1000, &ns) ? INT64_MAX : ns;
-}
-
-}  // namespace
 
 McapExporter::McapExporter(const std::string& path, StereoRig rig, const ExportOptions& options)
     : converter_(std::move(rig), options.convert),
@@ -94,7 +86,7 @@ void McapExporter::finish(const std::map<std::string, std::string>& metadata) {
                                  {"right_x_px", 0.5}, {"right_y_px", 0.5}, {"left_px", 0.5},
                                  {"right_px", 0.5}};
   const std::string centering_schema =
-      foxglove::schemaOf(centering_sample, "ptzstereo.run_centering").dump();
+      foxglove::dumpJson(foxglove::schemaOf(centering_sample, "ptzstereo.run_centering"));
   const auto frames = metrics_.frames();
   for (const auto& [seq, offsets] : metrics_.centeringByFrame()) {
     if (offsets.size() != 4) continue;
@@ -110,16 +102,19 @@ void McapExporter::finish(const std::map<std::string, std::string>& metadata) {
                     {"right_y_px", offsets[3]},
                     {"left_px", std::hypot(offsets[0], offsets[1])},
                     {"right_px", std::hypot(offsets[2], offsets[3])}};
-    write("/run/centering", "ptzstereo.run_centering", centering_schema, toNs(log_utime),
-          toNs(capture_utime), j.dump());
+    write("/run/centering", "ptzstereo.run_centering", centering_schema,
+          foxglove::utimeToNs(log_utime), foxglove::utimeToNs(capture_utime),
+          foxglove::dumpJson(j));
   }
   // The whole run's numbers, once, at the end of the run.
   const json summary = json::parse(metrics_.summary().toJson());
   write("/run/summary", "ptzstereo.run_summary",
-        foxglove::schemaOf(summary, "ptzstereo.run_summary").dump(), toNs(last_receive_utime_),
-        toNs(last_receive_utime_), summary.dump());
+        foxglove::dumpJson(foxglove::schemaOf(summary, "ptzstereo.run_summary")),
+        foxglove::utimeToNs(last_receive_utime_), foxglove::utimeToNs(last_receive_utime_),
+        foxglove::dumpJson(summary));
   std::map<std::string, std::string> run;
-  for (auto it = summary.begin(); it != summary.end(); ++it) run[it.key()] = it.value().dump();
+  for (auto it = summary.begin(); it != summary.end(); ++it)
+    run[it.key()] = foxglove::dumpJson(it.value());
   writer_.addMetadata("run_summary", run);
   writer_.addMetadata("source", metadata);
   writer_.close();

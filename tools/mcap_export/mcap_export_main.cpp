@@ -155,9 +155,7 @@ int main(int argc, char** argv) {
   p.add("duration_s", 0.0, "s", "--live: stop after this long; 0: at Ctrl-C",
         ptz::Range::atLeast(0));
   p.add("out", "", "the MCAP file to write (required)");
-  p.add("rig_file", "",
-        "rig file (OpenCV YAML) for the cameras' calibration and poses; empty: "
-        "the built-in default rig");
+  ptz::declareRigParams(p);
   p.add("image_rate_hz", 0.0, "Hz",
         "images (with calibration and detections) at most this "
         "often by capture time; 0: every frame",

@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
            "Renders the stereo pair of a ptz-sim scenario at one time and "
            "pose to <out>_left.png and <out>_right.png.");
   addAxisLimitParams(p);
-  p.add("rig_file", "", "rig file; empty: the built-in default rig");
+  declareRigParams(p);
   p.add("time_s", 0.0, "s", "scene time", Range::atLeast(0));
   p.add("pan_rad", 0.0, "rad", "pan of both cameras", Range::between(-6.3, 6.3));
   p.add("tilt_rad", 0.0, "rad", "tilt of both cameras", Range::between(-6.3, 6.3));

@@ -278,7 +278,7 @@ int main(int argc, char** argv) {
                 "q quit; a left click on an image selects the object under it. Needs X (or "
                 "Xvfb).");
   addTransportParams(params);
-  params.add("rig_file", "", "rig file (OpenCV YAML); empty: the built-in default rig");
+  declareRigParams(params);
   params.add("max_wait_s", 0.2, "s",
              "draw a frame without its detections, pose or tracks after this long",
              Range::atLeast(0));

@@ -317,3 +317,23 @@ TEST(Convert, WithAChannelPrefixOnlyThePrefixedChannelsAreShown) {
   EXPECT_TRUE(convert(c, "PTZ_SETPOINT", m).by_topic.empty());
   EXPECT_EQ(c.ignored().at("PTZ_SETPOINT"), 1);
 }
+
+// fuzz_foxglove_convert's find: LCM strings are any bytes, and nlohmann's dump() threw on bytes
+// that are not UTF-8, out of ptz-mcap and the bridge.
+TEST(Convert, StringsThatAreNotUtf8ConvertToValidJson) {
+  Converter c(ptz::StereoRig::makeDefault(), {});
+  ptzstereo::object_tracks_t m{};
+  m.utime = 5;
+  m.tracks.resize(1);
+  m.num_tracks = 1;
+  m.tracks[0].class_name = "ball\xff\xfe(";
+  const Converted out = convert(c, ptz::channels::kObjectTracks, m);
+  ASSERT_EQ(out.by_topic.count("/object_tracks"), 1u);
+  EXPECT_EQ(out.by_topic.at("/object_tracks")[0]["tracks"][0]["class_name"],
+            "ball\xef\xbf\xbd\xef\xbf\xbd(");  // each bad byte one U+FFFD
+  ptzstereo::process_status_t s{};
+  s.process = "p\xc3";
+  s.hostname = "h";
+  s.message = "\x80";
+  EXPECT_EQ(convert(c, "PROCESS_STATUS_P", s).by_topic.size(), 1u);
+}

@@ -3,13 +3,11 @@
 // FoxgloveClient on `ws`). The topics advertised with their schemas, an image and a transform
 // decoded, nothing more after an unsubscribe while other data flows; hostile clients answered
 // with statuses while a good one is served; a port in use is an error naming address and reason.
-// Needs node and test/js/node_modules (npm ci in test/js): skipped without them, failed when
-// PTZ_REQUIRE_JS=1.
+// The clients need node and test/js/node_modules (npm ci in test/js): PTZ_REQUIRE_JS skips
+// without them, or fails when PTZ_REQUIRE_JS=1.
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 
 #include <chrono>
-#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -17,12 +15,14 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/rig.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
+#include "support/mcap_check.hpp"
 #include "support/run_program.hpp"
 #include "tools/foxglove/convert.hpp"
 
@@ -33,14 +33,8 @@ using Status = ptzstereo::process_status_t;
 
 namespace {
 
-const std::string kJsDir = PTZ_SOURCE_DIR "/test/js";
 constexpr const char* kBridge = "ptz-foxglove-bridge";
 constexpr const char* kUrl = "ws://127.0.0.1:8765";
-
-bool exists(const std::string& path) {
-  struct stat st {};
-  return ::stat(path.c_str(), &st) == 0;
-}
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path);
@@ -48,28 +42,6 @@ std::string readFile(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
-
-// node, when it and the checkers' packages are there; else why not.
-std::string nodeOrWhyNot(std::string* why) {
-  std::string node = ptz::test::runShell("command -v node");
-  while (!node.empty() && (node.back() == '\n' || node.back() == ' ')) node.pop_back();
-  if (node.empty()) {
-    *why = "node is not installed (scripts/test installs it)";
-  } else if (!exists(kJsDir + "/node_modules/@foxglove/ws-protocol") ||
-             !exists(kJsDir + "/node_modules/ws")) {
-    *why = "test/js/node_modules is missing (npm ci in test/js)";
-  }
-  return node;
-}
-
-#define REQUIRE_NODE(node)                                             \
-  std::string why_no_node;                                             \
-  const std::string node = nodeOrWhyNot(&why_no_node);                 \
-  if (!why_no_node.empty()) {                                          \
-    const char* require = std::getenv("PTZ_REQUIRE_JS");               \
-    if (require && std::string(require) == "1") FAIL() << why_no_node; \
-    GTEST_SKIP() << "SKIPPED: " << why_no_node;                        \
-  }
 
 // The latest status of every process, by pid (two bridges may run).
 struct Statuses {
@@ -112,27 +84,31 @@ struct BridgeRun {
         << readFile(bridge_log);
   }
   int64_t counter(const std::string& name) const { return statuses.counter(bridge->pid(), name); }
+  // Until the bridge's status says `connected` clients came and all have gone.
+  bool clientsCameAndWent(int64_t connected) {
+    return ptz::test::handleUntil(
+        lcm, [&] { return counter("clients_connected") == connected && counter("clients") == 0; },
+        10s);
+  }
 };
 
-json runChecker(const std::string& node, const std::vector<std::string>& args) {
-  std::vector<std::string> argv = {node};
-  argv.insert(argv.end(), args.begin(), args.end());
-  const auto r = ptz::test::runProgram(argv);
-  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  const json j = json::parse(r.out, nullptr, false);
-  EXPECT_FALSE(j.is_discarded()) << r.out << r.err;
-  return j.is_discarded() ? json::object() : j;
+// A WebSocket checker's JSON, an empty object when it printed none.
+json runChecker(const std::string& script, const std::vector<std::string>& args) {
+  const ptz::test::JsCheckResult r = ptz::test::runJsChecker(script, args);
+  EXPECT_EQ(r.exit_code, 0) << r.json.dump() << r.err;
+  EXPECT_TRUE(r.json.is_object()) << r.err;
+  return r.json.is_object() ? r.json : json::object();
 }
 
 }  // namespace
 
 TEST(FoxgloveBridgeProcess, LiveTopicsReachARealFoxgloveClient) {
-  REQUIRE_NODE(node);
+  PTZ_REQUIRE_JS(ptz::test::kWsCheckPackages);
   BridgeRun run;
   ASSERT_NO_FATAL_FAILURE(run.start());
-  const json s = runChecker(
-      node, {kJsDir + "/ws_client_check.js", "--url", kUrl, "--topics", "/left/image,/tf",
-             "--control", "/right/image", "--window-ms", "1000", "--min-control", "3"});
+  const json s = runChecker("ws_client_check.js",
+                            {"--url", kUrl, "--topics", "/left/image,/tf", "--control",
+                             "/right/image", "--window-ms", "1000", "--min-control", "3"});
   ASSERT_EQ(s.value("ok", false), true) << s.dump(1);
 
   EXPECT_EQ(s["server_info"]["name"], kBridge);
@@ -188,10 +164,7 @@ TEST(FoxgloveBridgeProcess, LiveTopicsReachARealFoxgloveClient) {
   EXPECT_EQ(s["statuses"][0]["level"], 1);
 
   // Its status counts the client, what it was sent and the one unsupported op; the client gone.
-  ASSERT_TRUE(ptz::test::handleUntil(
-      run.lcm, [&] { return run.counter("clients_connected") == 1 && run.counter("clients") == 0; },
-      10s))
-      << readFile(run.bridge_log);
+  ASSERT_TRUE(run.clientsCameAndWent(1)) << readFile(run.bridge_log);
   EXPECT_GE(run.counter("messages_sent"), 5);
   EXPECT_EQ(run.counter("client_errors"), 1);
   EXPECT_EQ(run.counter("client_errors_unsupported_op"), 1);
@@ -203,11 +176,11 @@ TEST(FoxgloveBridgeProcess, LiveTopicsReachARealFoxgloveClient) {
 }
 
 TEST(FoxgloveBridgeProcess, HostileClientsGetStatusesAndAGoodClientIsServedThroughout) {
-  REQUIRE_NODE(node);
+  PTZ_REQUIRE_JS(ptz::test::kWsCheckPackages);
   BridgeRun run;
   ASSERT_NO_FATAL_FAILURE(run.start());
-  const json s = runChecker(
-      node, {kJsDir + "/ws_hostile_check.js", "--url", kUrl, "--topic", "/tf", "--min-good", "3"});
+  const json s =
+      runChecker("ws_hostile_check.js", {"--url", kUrl, "--topic", "/tf", "--min-good", "3"});
   ASSERT_EQ(s.value("ok", false), true) << s.dump(1);
   EXPECT_EQ(s["refused_without_subprotocol"], 400);
   // name -> (level, part of the message)
@@ -238,10 +211,7 @@ TEST(FoxgloveBridgeProcess, HostileClientsGetStatusesAndAGoodClientIsServedThrou
   EXPECT_GE(s["good_messages_after_hostile"].get<int>(), 3);
   EXPECT_GE(s["good_messages_after_giant"].get<int>(), 3);
 
-  ASSERT_TRUE(ptz::test::handleUntil(
-      run.lcm, [&] { return run.counter("clients_connected") == 2 && run.counter("clients") == 0; },
-      10s))
-      << readFile(run.bridge_log);
+  ASSERT_TRUE(run.clientsCameAndWent(2)) << readFile(run.bridge_log);
   EXPECT_EQ(run.counter("clients_refused"), 1);
   EXPECT_EQ(run.counter("clients_closed_too_large"), 1);
   EXPECT_EQ(run.counter("client_errors"), 9);

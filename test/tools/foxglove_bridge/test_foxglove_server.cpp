@@ -138,6 +138,14 @@ bool waitFor(const Server& s, Cond cond) {
   return true;
 }
 
+// On 127.0.0.1, a free port.
+ServerOptions loopback() {
+  ServerOptions o;
+  o.address = "127.0.0.1";
+  o.port = 0;
+  return o;
+}
+
 std::string subscribe(uint32_t id, uint32_t channel) {
   return R"({"op":"subscribe","subscriptions":[{"id":)" + std::to_string(id) + R"(,"channelId":)" +
          std::to_string(channel) + "}]}";
@@ -146,9 +154,7 @@ std::string subscribe(uint32_t id, uint32_t channel) {
 }  // namespace
 
 TEST(FoxgloveServer, ASlowClientIsHeldBackWhileAReadingClientGetsEveryNewestMessage) {
-  ServerOptions o;
-  o.address = "127.0.0.1";
-  o.port = 0;
+  ServerOptions o = loopback();
   o.send_buffer_limit_bytes = 256 * 1024;
   Server server(o);
   const uint32_t channel = server.addChannel("/big", "json", "test.Big", "{}");
@@ -205,10 +211,7 @@ TEST(FoxgloveServer, ASlowClientIsHeldBackWhileAReadingClientGetsEveryNewestMess
 }
 
 TEST(FoxgloveServer, ChannelsAddedLaterAreAdvertisedAndProblemsAnswered) {
-  ServerOptions o;
-  o.address = "127.0.0.1";
-  o.port = 0;
-  Server server(o);
+  Server server(loopback());
   server.start();
   RawClient c(server.port());
   ASSERT_TRUE(c.ok());
@@ -237,9 +240,7 @@ TEST(FoxgloveServer, ChannelsAddedLaterAreAdvertisedAndProblemsAnswered) {
 }
 
 TEST(FoxgloveServer, APortInUseIsNamed) {
-  ServerOptions o;
-  o.address = "127.0.0.1";
-  o.port = 0;
+  ServerOptions o = loopback();
   Server first(o);
   first.start();
   o.port = first.port();

@@ -47,6 +47,31 @@ TEST(RunMetrics, ATargetBehindACameraIsOutsideTheImageAndNotInTheCentring) {
   EXPECT_EQ(m.centeringByFrame().count(2), 0u);
 }
 
+// The same scene seen at 1080p (the cameras' field of view kept): the same VGA-equivalent offset.
+TEST(RunMetrics, CentringIsInVgaEquivalentPixelsAtEveryResolution) {
+  syn::Object ball = kBall;
+  ball.position_m = {0.3, -0.2, 2.5};
+  ptzstereo::sim_truth_t vga = syn::truth(0, {ball});
+  ptzstereo::sim_truth_t hd = vga;
+  for (auto* cam : {&hd.left_camera, &hd.right_camera}) {
+    cam->width = 1920;
+    cam->height = 1440;
+    cam->fx_px *= 3;
+    cam->fy_px *= 3;
+    cam->cx_px = (cam->cx_px + 0.5) * 3 - 0.5;
+    cam->cy_px = (cam->cy_px + 0.5) * 3 - 0.5;
+  }
+  RunMetrics at_vga("red_ball", 0.0), at_hd("red_ball", 0.0);
+  at_vga.onTruth(vga);
+  at_hd.onTruth(hd);
+  const auto a = at_vga.centeringByFrame().at(0), b = at_hd.centeringByFrame().at(0);
+  ASSERT_EQ(a.size(), 4u);
+  ASSERT_EQ(b.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) EXPECT_NEAR(b[i], a[i], 1e-9) << i;
+  EXPECT_GT(std::abs(a[0]), 50);  // off the centre, so the scale shows
+  EXPECT_NEAR(at_hd.summary().centering_rms_px, at_vga.summary().centering_rms_px, 1e-9);
+}
+
 TEST(RunMetrics, ATargetNearlyNinetyDegreesOffTheAxisIsAPinholeOffsetNotAnAbsurdOne) {
   // The simulator's barrel distortion: its polynomial gives ~1e9 px this far out.
   ptzstereo::sim_truth_t t = syn::truth(0, {});
