@@ -158,6 +158,11 @@ bool run(const std::string& name, const ptz::StereoRig& rig, const std::vector<F
   }
   std::printf("%-52s %.3f x (p99: %.3f x)\n", "  full / bare on the matched pair (medians)",
               ratio(full_ms, bare_ms, 50), ratio(full_ms, bare_ms, 99));
+  // For scripts/bench's table: the size, full and bare median / p99 (ms), the ratios.
+  std::printf("DEPTH-ROW %s %.1f/%.1f %.1f/%.1f %.2f %.2f\n", name.c_str(),
+              ptz::percentile(full_ms, 50), ptz::percentile(full_ms, 99),
+              ptz::percentile(bare_ms, 50), ptz::percentile(bare_ms, 99),
+              ratio(full_ms, bare_ms, 50), ratio(full_ms, bare_ms, 99));
   if (decimated) {
     std::printf("%-52s %.3f x\n", "  full / bare at full size (medians)",
                 ratio(full_ms, bare_full_size_ms, 50));

@@ -58,8 +58,9 @@ std::vector<Frame> render(const ptz::StereoRig& rig, const ptz::sim::Scene& scen
     sim.advanceTo(t + 0.01);
     const ptz::sim::SimFrame f = sim.capture();
     Frame fr;
-    cv::imencode(".jpg", f.left, fr.left, {cv::IMWRITE_JPEG_QUALITY, 90});
-    cv::imencode(".jpg", f.right, fr.right, {cv::IMWRITE_JPEG_QUALITY, 90});
+    // As ptz-sim sends them (restart markers at every MCU row: jpeg_restart.hpp).
+    fr.left = ptz::encodeImage(f.left, ptzstereo::image_t::ENCODING_JPEG, 90).data;
+    fr.right = ptz::encodeImage(f.right, ptzstereo::image_t::ENCODING_JPEG, 90).data;
     fr.left_pose = f.left_pose;
     fr.right_pose = f.right_pose;
     fr.t_s = f.t_s;
@@ -190,6 +191,9 @@ void run(const char* name, const ptz::StereoRig& rig, const std::vector<Frame>& 
   configs.push_back(
       config("windows on, full scans pyramid " + std::to_string(pyramid_px) + " px, JPEG", true,
              pyramid_px, false));
+  if (rig.left.width > 960) {  // a quarter of 1080p's width
+    configs.push_back(config("windows on, full scans pyramid 480 px, JPEG", true, 480, false));
+  }
   std::vector<std::string> names;
   for (const auto& c : detector.params().classes) names.push_back(c.name);
   for (const Frame& f : frames) {

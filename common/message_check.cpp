@@ -251,6 +251,22 @@ PTZ_CHECKED_MESSAGE(sim_truth_t)
 PTZ_CHECKED_MESSAGE(target_select_t)
 #undef PTZ_CHECKED_MESSAGE
 
+namespace {
+// Entropy-coded data stuffs every 0xFF with 0x00: FF DA is a start-of-scan marker wherever it is.
+// memchr to each 0xFF: a 1080p frame in microseconds, not a tenth of a millisecond byte by byte.
+// Not inlined: readJpegHeader's setjmp frame must not hold its loop's variables.
+__attribute__((noinline)) int countStartOfScan(const uint8_t* data, size_t size) {
+  int scans = 0;
+  const uint8_t* end = data + size;
+  for (const uint8_t* p = data; p + 1 < end; ++p) {
+    p = static_cast<const uint8_t*>(std::memchr(p, 0xFF, static_cast<size_t>(end - 1 - p)));
+    if (!p) break;
+    if (p[1] == 0xDA) ++scans;
+  }
+  return scans;
+}
+}  // namespace
+
 bool readJpegHeader(const uint8_t* data, size_t size, JpegHeader* header, std::string* why) {
   // The start-of-image marker and a marker after it: OpenCV picks its decoder from the bytes, and
   // garbage after FF D8 that libjpeg skips could make it take another format (DICOM aborts).
@@ -280,11 +296,7 @@ bool readJpegHeader(const uint8_t* data, size_t size, JpegHeader* header, std::s
     *why = "JPEG header incomplete";
     return false;
   }
-  // Entropy-coded data stuffs every 0xFF with 0x00: FF DA is a start-of-scan marker wherever it is.
-  header->scans = 0;
-  for (size_t i = 0; i + 1 < size; ++i) {
-    if (data[i] == 0xFF && data[i + 1] == 0xDA) ++header->scans;
-  }
+  header->scans = countStartOfScan(data, size);
   return true;
 }
 

@@ -2,6 +2,8 @@
 
 #include "common/freshness.hpp"
 
+#include <malloc.h>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -148,7 +150,10 @@ ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_q
   msg.encoding = encoding;
   msg.zoom = 1.0;
   if (encoding == ptzstereo::image_t::ENCODING_JPEG) {
-    cv::imencode(".jpg", image, msg.data, {cv::IMWRITE_JPEG_QUALITY, jpeg_quality});
+    // A restart at every MCU row (4:2:0: 16 px; gray 8): windows decode alone (jpeg_restart.hpp).
+    cv::imencode(".jpg", image, msg.data,
+                 {cv::IMWRITE_JPEG_QUALITY, jpeg_quality, cv::IMWRITE_JPEG_RST_INTERVAL,
+                  image.channels() == 3 ? (image.cols + 15) / 16 : (image.cols + 7) / 8});
   } else {
     msg.data.resize(static_cast<size_t>(msg.row_stride) * image.rows);
     for (int r = 0; r < image.rows; ++r) {
@@ -176,8 +181,13 @@ ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::
   ptzstereo::stereo_frame_t msg{};
   msg.utime = utime;
   msg.seq = seq;
-  msg.left = encodeImage(left, left_pose, encoding, jpeg_quality);
-  msg.right = encodeImage(right, right_pose, encoding, jpeg_quality);
+  // The two images on two cores: JPEG encoding is most of a frame's readout after the render.
+  cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& sides) {
+    for (int side = sides.start; side < sides.end; ++side) {
+      if (side == 0) msg.left = encodeImage(left, left_pose, encoding, jpeg_quality);
+      if (side == 1) msg.right = encodeImage(right, right_pose, encoding, jpeg_quality);
+    }
+  });
   return msg;
 }
 
@@ -221,9 +231,18 @@ bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* err
   return true;
 }
 
+void keepFreedMemory() {
+  // Frame-sized buffers come and go every frame. By default glibc maps each above its threshold
+  // afresh and trims the heap after it, so every frame page-faults its buffers in again: a third
+  // of ptz-detect's time on a VM (ptz_bench_loop). Kept, they are reused.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+}
+
 int runProcess(int argc, char** argv, Params& params,
                const std::function<int(const Params&, lcm::LCM&)>& body) {
   const char* name = params.program().c_str();
+  keepFreedMemory();
   try {
     if (!params.parse(argc, argv)) return 0;
     const std::string url = lcmUrl(params);

@@ -124,6 +124,10 @@ int8_t imageEncodingFrom(const Params& params);
 // inconsistent.
 bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
 
+// Keeps freed memory in the process for reuse (no unmapping or trimming of the heap): frames'
+// buffers are not page-faulted in again every frame. runProcess does it first.
+void keepFreedMemory();
+
 // The main of every process: parses flags and the config file (--help prints the usage), opens
 // LCM at lcmUrl() (warning when its receive buffer is too small), installs the stop flag and
 // runs body. A ConfigError from any of it ends the process with exit code 2 and the message

@@ -6,12 +6,15 @@
 // (decodeJpegWindow, libjpeg-turbo's crop and skip) of the whole image and of a part: it refuses
 // a header that does not say the message's size in colour, and otherwise gives the part's size in
 // BGR. (Its pixels equal a full decode's for valid JPEGs, test_windows.cpp; of damaged data
-// cv::imdecode may give zeros where libjpeg fills in, so that is no property here.) The pyramid's
+// cv::imdecode may give zeros where libjpeg fills in, so that is no property here.) A part at the
+// bottom too; each part also through the restart index (jpeg_restart.hpp) and through the stream
+// from its top: the same verdict and the same pixels, whatever the bytes. The pyramid's
 // reduced decode (decodeJpegReduced) by 2, 4, 8: the same refusals, the reduced size, the same
 // pixels when decoded twice; any other scale refused.
 #include <opencv2/core.hpp>
 
 #include <algorithm>
+#include <vector>
 
 #include "common/message_check.hpp"
 #include "common/transport.hpp"
@@ -66,7 +69,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const cv::Rect whole(0, 0, msg.width, msg.height);
     const cv::Rect part(msg.width / 3, msg.height / 3, std::max(1, msg.width / 3),
                         std::max(1, msg.height / 3));
-    for (const cv::Rect& r : {whole, part}) {
+    const cv::Rect bottom(0, msg.height - std::max(1, msg.height / 4), msg.width,
+                          std::max(1, msg.height / 4));
+    const ptz::perception::JpegRestartIndex index(msg.data.data(), msg.data.size());
+    const ptz::perception::JpegRestartIndex stream(msg.data.data(), msg.data.size(), false);
+    for (const cv::Rect& r : {whole, part, bottom}) {
       cv::Mat window;
       std::string window_why;
       const bool ok = ptz::perception::decodeJpegWindow(msg.data.data(), msg.data.size(), msg.width,
@@ -82,6 +89,24 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       FUZZ_CHECK(window.size() == r.size() && window.type() == CV_8UC3,
                  "a window of " + std::to_string(window.cols) + "x" + std::to_string(window.rows) +
                      " for " + std::to_string(r.width) + "x" + std::to_string(r.height));
+    }
+    // Restart segments against the stream from its top (with the part above it, so that two
+    // bands apart are decoded when the index allows).
+    for (const std::vector<cv::Rect>& rs :
+         {std::vector<cv::Rect>{part}, std::vector<cv::Rect>{bottom}, {part, bottom}}) {
+      std::vector<cv::Mat> fast, slow;
+      std::string fast_why, slow_why;
+      const bool fast_ok =
+          ptz::perception::decodeJpegWindows(index, msg.width, msg.height, rs, &fast, &fast_why);
+      const bool slow_ok =
+          ptz::perception::decodeJpegWindows(stream, msg.width, msg.height, rs, &slow, &slow_why);
+      FUZZ_CHECK(fast_ok == slow_ok, "restart segments " +
+                                         std::string(fast_ok ? "took" : "refused") +
+                                         " what the stream " + (slow_ok ? "took" : "refused"));
+      for (size_t i = 0; fast_ok && slow_ok && i < rs.size(); ++i) {
+        FUZZ_CHECK(cv::norm(fast[i], slow[i], cv::NORM_INF) == 0,
+                   "restart segments gave other pixels than the stream");
+      }
     }
     // The pyramid's reduced decode (libjpeg's DCT scaling): the same header rule, the reduced
     // size in BGR, the same pixels twice; other scales refused.

@@ -379,6 +379,15 @@ void jpegs() {
         with(image_t::PIXEL_BGR8, 40, 8,
              jpeg(picture(40, 8, false),
                   {cv::IMWRITE_JPEG_OPTIMIZE, 1, cv::IMWRITE_JPEG_RST_INTERVAL, 1})));
+  // As ptz-sim and ptz-camera send them (encodeImage: a restart marker at every MCU row), tall
+  // enough that a part's rows are decoded from restart segments alone; and every second row.
+  write("fuzz_jpeg", "row_restarts",
+        with(image_t::PIXEL_BGR8, 48, 96,
+             ptz::encodeImage(picture(48, 96, false), image_t::ENCODING_JPEG, 90).data));
+  write("fuzz_jpeg", "restarts_every_two_rows",
+        with(image_t::PIXEL_BGR8, 40, 112,
+             jpeg(picture(40, 112, false),
+                  {cv::IMWRITE_JPEG_QUALITY, 80, cv::IMWRITE_JPEG_RST_INTERVAL, 6})));
   // The JPEG whose header says more than the message.
   write("fuzz_jpeg", "header_larger_than_message",
         with(image_t::PIXEL_BGR8, 16, 12, jpeg(picture(32, 24, false))));

@@ -6,6 +6,7 @@
 // trusted measurement updated it in this frame.
 #include <opencv2/imgproc.hpp>
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -212,14 +213,44 @@ bool decodeReduced(const ptzstereo::image_t& m, int scale, cv::Mat* out, std::st
   return true;
 }
 
-// Both ways of reading an image, for WindowScanner::detect.
-ImagePixels pixelsOf(const ptzstereo::image_t& m) {
-  return {
-      [&m](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
-        return decodeParts(m, r, out, e);
-      },
-      [&m](int scale, cv::Mat* out, std::string* e) { return decodeReduced(m, scale, out, e); }};
-}
+// One image of a frame: what WindowScanner::detect decoded of it at full resolution is kept, so
+// that a box's view for its yaw is cut from it instead of decoded again (at 1080p a JPEG's second
+// pass cost more than the rest of the frame). A part of a window is exactly its decode (the
+// same pixels: jpeg_window.hpp).
+class FramePixels {
+ public:
+  explicit FramePixels(const ptzstereo::image_t& m) : m_(m) {}
+
+  // Both ways of reading the image, for WindowScanner::detect.
+  ImagePixels pixels() {
+    return {[this](const std::vector<cv::Rect>& r, std::vector<cv::Mat>* out, std::string* e) {
+              if (!decodeParts(m_, r, out, e)) return false;
+              for (size_t i = 0; i < r.size() && i < out->size(); ++i)
+                decoded_.emplace_back(r[i], (*out)[i]);
+              return true;
+            },
+            [this](int scale, cv::Mat* out, std::string* e) {
+              return decodeReduced(m_, scale, out, e);
+            }};
+  }
+
+  // The pixels of `rect`: from a part decoded already when one holds it (*reused), else decoded.
+  bool crop(const cv::Rect& rect, cv::Mat* out, bool* reused, std::string* why) const {
+    for (const auto& [r, part] : decoded_) {
+      if ((r & rect) == rect && part.rows == r.height && part.cols == r.width) {
+        *out = part(rect - r.tl());
+        *reused = true;
+        return true;
+      }
+    }
+    *reused = false;
+    return decodeRect(m_, rect, out, why);
+  }
+
+ private:
+  const ptzstereo::image_t& m_;
+  std::vector<std::pair<cv::Rect, cv::Mat>> decoded_;
+};
 
 std::vector<std::string> classNames(const DetectorParams& dp) {
   std::vector<std::string> names;
@@ -358,8 +389,9 @@ class DetectNode {
     ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
     std::vector<Region> lr, rr;
     std::string why;
-    const bool decoded =
-        windows_.detect(detector_, &plan, pixelsOf(m->left), pixelsOf(m->right), &lr, &rr, &why);
+    FramePixels left_pixels(m->left), right_pixels(m->right);
+    const bool decoded = windows_.detect(detector_, &plan, left_pixels.pixels(),
+                                         right_pixels.pixels(), &lr, &rr, &why);
     if (!decoded) {
       drop("bad_image", "frame " + std::to_string(m->seq) + ": " + why);
       return;
@@ -369,7 +401,8 @@ class DetectNode {
     const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, stereo_);
     std::vector<TrackMeasurement> measurements = trackMeasurements(
         objects, lr, rr, lv, rv, class_names_, trusted_area_ratio_, tracker_.tracks(), t_s);
-    const std::vector<BoxYaw> yaws = estimateYaws(*m, objects, measurements, lr, rr, lv, rv);
+    const std::vector<BoxYaw> yaws =
+        estimateYaws(*m, {&left_pixels, &right_pixels}, objects, measurements, lr, rr, lv, rv);
     for (TrackMeasurement& tm : measurements) {
       if (tm.object_index < 0 || static_cast<size_t>(tm.object_index) >= yaws.size()) continue;
       const BoxYaw& y = yaws[static_cast<size_t>(tm.object_index)];
@@ -433,12 +466,13 @@ class DetectNode {
       tracks.tracks.push_back(toMessage(t, t_s, tracker_.params().yaw_psd_rad2_s));
     }
     tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
-    det.publish_utime = wallUtime();
-    status_.publish(ch_detections_, det, latencyMs(m->utime, det.publish_utime));
-    pose.publish_utime = wallUtime();
-    status_.publish(ch_pose_, pose, latencyMs(m->utime, pose.publish_utime));
+    // ptz-control's input first: the chain does not wait for the other two to be encoded and sent.
     tracks.publish_utime = wallUtime();
     status_.publish(ch_tracks_, tracks, latencyMs(m->utime, tracks.publish_utime));
+    pose.publish_utime = wallUtime();
+    status_.publish(ch_pose_, pose, latencyMs(m->utime, pose.publish_utime));
+    det.publish_utime = wallUtime();
+    status_.publish(ch_detections_, det, latencyMs(m->utime, det.publish_utime));
     status_.setCounter("tracks_live", static_cast<int64_t>(tracker_.tracks().size()));
     status_.setCounter("tracks_started", tracker_.tracksStarted());
     status_.setCounter("tracks_recovered", tracker_.recoveries());
@@ -472,6 +506,7 @@ class DetectNode {
   // The yaws of the trusted boxes (a cut, merged or half-hidden region gives none), at most
   // orientation_max_per_frame of them, nearest the left image's centre first.
   std::vector<BoxYaw> estimateYaws(const ptzstereo::stereo_frame_t& m,
+                                   const std::array<const FramePixels*, 2>& pixels,
                                    const std::vector<StereoObject>& objects,
                                    const std::vector<TrackMeasurement>& measurements,
                                    const std::vector<Region>& lr, const std::vector<Region>& rr,
@@ -510,11 +545,14 @@ class DetectNode {
       const int margin_px = std::max(orientation_margin_px_, detector_.exactMarginPx());
       const cv::Rect lc = boxCrop(l.bbox, lsize, margin_px);
       const cv::Rect rc = boxCrop(r.bbox, rsize, margin_px);
+      bool lreused = false, rreused = false;
       if (regionCut(l.bbox, lsize) || regionCut(r.bbox, rsize) ||
-          !decodeRect(m.left, lc, &lcrop, &why) || !decodeRect(m.right, rc, &rcrop, &why)) {
+          !pixels[0]->crop(lc, &lcrop, &lreused, &why) ||
+          !pixels[1]->crop(rc, &rcrop, &rreused, &why)) {
         status_.increment("orientations_failed");
         continue;
       }
+      status_.increment("orientation_views_decoded", (lreused ? 0 : 1) + (rreused ? 0 : 1));
       yaws[i] = estimateBoxYaw(makeBoxView(detector_, ci, lcrop, lc.tl(), l.bbox, lv),
                                makeBoxView(detector_, ci, rcrop, rc.tl(), r.bbox, rv),
                                o.position_head_m, orientation_params_);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <csetjmp>
 #include <cstdio>
+#include <numeric>
 #include <vector>
 
 #include "common/jpeg_error.hpp"
@@ -39,28 +40,18 @@ bool checkHeader(const uint8_t* data, size_t size, int width, int height, std::s
   return true;
 }
 
-}  // namespace
-
-bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
-                       const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
-                       std::string* why) {
-  if (!checkHeader(data, size, width, height, why)) return false;
-  if (rects.empty()) {
-    *why = "no window";
-    return false;
-  }
+// The parts rects[i], i in `which` (image coordinates), from a JPEG of width x height pixels
+// whose first row is image row y0 (the whole image, or a band of MCU rows): (*parts)[i], already
+// allocated. *rows: about how many of the stream's rows went through the entropy decoder.
+bool decodeStream(const uint8_t* data, size_t size, int y0, int width, int height,
+                  const std::vector<cv::Rect>& rects, const std::vector<size_t>& which,
+                  std::vector<cv::Mat>* parts, std::string* why, int* rows) {
+  // Everything libjpeg allocates is in its pools (freed by destroy); the vectors are declared
+  // before setjmp, so a longjmp skips no destructor of a live object.
+  std::vector<cv::Rect> local;  // in the stream's rows
+  for (size_t i : which) local.push_back(rects[i] - cv::Point(0, y0));
   cv::Rect all;
-  for (const auto& r : rects) {
-    if (r.empty() || (r & cv::Rect(0, 0, width, height)) != r) {
-      *why = "window outside the image";
-      return false;
-    }
-    all = all.empty() ? r : (all | r);
-  }
-  // Everything libjpeg allocates is in its pools (freed by destroy); the parts and the row are
-  // declared before setjmp, so a longjmp skips no destructor of a live object.
-  std::vector<cv::Mat> parts;
-  for (const auto& r : rects) parts.emplace_back(r.height, r.width, CV_8UC3);
+  for (const auto& r : local) all = all.empty() ? r : (all | r);
   std::vector<uint8_t> row;
   jpeg_decompress_struct info{};
   JpegError err{};
@@ -74,7 +65,9 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
   }
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
-  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK) {
+  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK ||
+      info.image_width != static_cast<JDIMENSION>(width) ||
+      info.image_height != static_cast<JDIMENSION>(height) || all.y < 0 || all.br().y > height) {
     jpeg_destroy_decompress(&info);
     *why = "JPEG header incomplete";
     return false;
@@ -101,7 +94,7 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
   while (y < all.br().y) {
     bool needed = false;
     int next = all.br().y;  // the first row >= y some part holds
-    for (const auto& r : rects) {
+    for (const auto& r : local) {
       if (y >= r.y && y < r.br().y) needed = true;
       if (r.y > y) next = std::min(next, r.y);
     }
@@ -117,18 +110,119 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
       *why = "JPEG data ends early";
       return false;
     }
-    for (size_t i = 0; i < rects.size(); ++i) {
-      const cv::Rect& r = rects[i];
+    for (size_t k = 0; k < local.size(); ++k) {
+      const cv::Rect& r = local[k];
       if (y < r.y || y >= r.br().y) continue;
       const size_t from = static_cast<size_t>(r.x - static_cast<int>(x0)) * 3;
       std::copy(row.begin() + static_cast<ptrdiff_t>(from),
                 row.begin() + static_cast<ptrdiff_t>(from + static_cast<size_t>(r.width) * 3),
-                parts[i].ptr(y - r.y));
+                (*parts)[which[k]].ptr(y - r.y));
     }
     ++y;
   }
+  // Context upsampling decodes an iMCU row ahead of the last row read.
+  *rows = std::min(height, ((all.br().y - 1) / vimcu + 2) * vimcu);
   jpeg_destroy_decompress(&info);  // abort, not finish: the rows below are not read
+  return true;
+}
+
+// The parts from restart segments: a band of MCU rows per group of parts whose rows (with one MCU
+// row of context above and below: fancy upsampling reads the chroma rows around) overlap or
+// touch; a band at the top is the stream itself. False when any band fails (the caller then
+// decodes the stream from its top, whose verdict stands).
+bool decodeBands(const JpegRestartIndex& jpeg, const std::vector<cv::Rect>& rects,
+                 std::vector<cv::Mat>* parts, JpegWindowStats* stats) {
+  struct Band {
+    int r0, r1;
+    std::vector<size_t> which;
+  };
+  const int mh = jpeg.mcuHeight(), height = jpeg.height();
+  std::vector<size_t> order(rects.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](size_t a, size_t b) { return rects[a].y < rects[b].y; });
+  std::vector<Band> bands;
+  for (size_t i : order) {
+    const int lo = jpeg.bandStart(std::max(0, rects[i].y / mh - 1));
+    const int hi = std::min(jpeg.mcuRows(), (rects[i].br().y + mh - 1) / mh + 1);
+    // Apart, a second band costs its header and set-up; a gap of rows between costs their
+    // entropy decoding: only bands that touch are joined (two 1080p windows a row apart: 0.30 ms
+    // as two bands, 0.52 ms as one).
+    if (!bands.empty() && lo <= bands.back().r1) {
+      bands.back().r1 = std::max(bands.back().r1, hi);
+      bands.back().which.push_back(i);
+    } else {
+      bands.push_back({lo, hi, {i}});
+    }
+  }
+  std::vector<uint8_t> bytes;
+  std::string why;
+  for (const Band& b : bands) {
+    int rows = 0;
+    if (b.r0 == 0) {
+      if (!decodeStream(jpeg.data(), jpeg.size(), 0, jpeg.width(), height, rects, b.which, parts,
+                        &why, &rows)) {
+        return false;
+      }
+    } else {
+      const int y0 = b.r0 * mh;
+      if (!jpeg.band(b.r0, b.r1, &bytes) ||
+          !decodeStream(bytes.data(), bytes.size(), y0, jpeg.width(),
+                        std::min(b.r1 * mh, height) - y0, rects, b.which, parts, &why, &rows)) {
+        return false;
+      }
+      ++stats->restart_bands;
+    }
+    stats->decoded_rows += rows;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
+                       const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
+                       std::string* why) {
+  // The index reads the bytes with its own bounds; the header is checked by libjpeg after it.
+  return decodeJpegWindows(JpegRestartIndex(data, size), width, height, rects, outs, why);
+}
+
+bool decodeJpegWindows(const JpegRestartIndex& jpeg, int width, int height,
+                       const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* outs,
+                       std::string* why, JpegWindowStats* stats) {
+  // A usable index has checked more than readJpegHeader (a baseline SOF of 3 components, one scan
+  // and its every marker): its pass over the bytes (about 0.1 ms at 1080p) is saved.
+  const bool restarts = jpeg.usable() && jpeg.width() == width && jpeg.height() == height;
+  if (!restarts && !checkHeader(jpeg.data(), jpeg.size(), width, height, why)) return false;
+  if (rects.empty()) {
+    *why = "no window";
+    return false;
+  }
+  for (const auto& r : rects) {
+    if (r.empty() || (r & cv::Rect(0, 0, width, height)) != r) {
+      *why = "window outside the image";
+      return false;
+    }
+  }
+  std::vector<cv::Mat> parts;
+  for (const auto& r : rects) parts.emplace_back(r.height, r.width, CV_8UC3);
+  JpegWindowStats cost;
+  if (restarts && decodeBands(jpeg, rects, &parts, &cost)) {
+    *outs = parts;
+    if (stats != nullptr) *stats = cost;
+    return true;
+  }
+  // The stream from its top, after the full check when it was skipped.
+  if (restarts && !checkHeader(jpeg.data(), jpeg.size(), width, height, why)) return false;
+  cost = {};
+  std::vector<size_t> which(rects.size());
+  std::iota(which.begin(), which.end(), size_t{0});
+  if (!decodeStream(jpeg.data(), jpeg.size(), 0, width, height, rects, which, &parts, why,
+                    &cost.decoded_rows)) {
+    return false;
+  }
   *outs = parts;
+  if (stats != nullptr) *stats = cost;
   return true;
 }
 

@@ -2,6 +2,7 @@
 // each image stamped with its camera's pan/tilt/zoom at capture from PTZ_STATE. Everything but
 // the messages is the library's (stereo_camera.hpp); this loop waits on LCM and on the readers.
 #include <poll.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -43,9 +44,13 @@ class CameraNode {
         preview_(p),
         encoding_(imageEncodingFrom(p)),
         jpeg_quality_(p.getInt("jpeg_quality")),
+        preview_due_(p.getDouble("preview_rate_hz")),
+        preview_width_px_(p.getInt("preview_width_px")),
         ch_frame_(channel(p, channels::kStereoFrame)),
         ch_state_(channel(p, channels::kPtzState)) {
-    const CameraConfig config = cameraConfigFrom(p);
+    CameraConfig config = cameraConfigFrom(p);
+    // Recorded JPEGs of the published size go out as they are: no decode, no re-encode.
+    for (auto& c : config.capture) c.pass_jpeg = encoding_ == ptzstereo::image_t::ENCODING_JPEG;
     auto clock = std::make_shared<PlaybackClock>();
     std::array<SourceFactory, 2> factories;
     for (size_t s = 0; s < 2; ++s) {
@@ -73,7 +78,7 @@ class CameraNode {
       }
       notifier_->drain();
       const int64_t now = wallUtime();
-      for (auto& pair : camera_->step(now)) publish(pair);
+      for (auto& pair : camera_->step(now)) publish(&pair);
       for (const auto& e : camera_->takeEvents())
         std::fprintf(stderr, "ptz-camera: %s\n", e.c_str());
       report(now);
@@ -120,16 +125,63 @@ class CameraNode {
     status_.countIn(ch, (wallUtime() - m.utime) / 1000.0);
   }
 
-  void publish(const StampedPair& p) {
-    ptzstereo::stereo_frame_t msg =
-        makeStereoFrame(p.left.capture_utime, seq_++, p.left.image, p.left_pose, p.right.image,
-                        p.right_pose, encoding_, jpeg_quality_);
+  void publish(StampedPair* p) {
+    ptzstereo::stereo_frame_t msg{};
+    if (p->left.jpeg.empty() && p->right.jpeg.empty()) {
+      msg = makeStereoFrame(p->left.capture_utime, seq_++, p->left.image, p->left_pose,
+                            p->right.image, p->right_pose, encoding_, jpeg_quality_);
+    } else {
+      msg.utime = p->left.capture_utime;
+      msg.seq = seq_++;
+      msg.left = imageMessage(&p->left, p->left_pose);
+      msg.right = imageMessage(&p->right, p->right_pose);
+    }
+    // Previews need pixels: a passed-through JPEG is decoded (reduced) only when one is due.
+    const bool preview = preview_due_.take(msg.utime);
+    if (preview) {
+      for (auto [f, image] : {std::pair{&p->left, &msg.left}, {&p->right, &msg.right}}) {
+        if (f->image.empty()) f->image = reducedDecode(image->data, f->jpeg_size.width);
+      }
+    }
     msg.publish_utime = wallUtime();
     status_.publishOn(bulk_out_.lcm(), ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
-    preview_.maybePublish(status_, *lcm_, msg.utime, msg.seq, p.left.image, p.left_pose,
-                          p.right.image, p.right_pose);
-    wait_ms_.push_back((msg.publish_utime - p.first_arrival_utime) / 1000.0);
-    ptz_wait_ms_.push_back(p.ptz_wait_us / 1000.0);
+    // Its schedule takes exactly when preview_due_ does: the same rate and the same times.
+    if (preview) {
+      preview_.maybePublish(status_, *lcm_, msg.utime, msg.seq, p->left.image, p->left_pose,
+                            p->right.image, p->right_pose);
+    }
+    wait_ms_.push_back((msg.publish_utime - p->first_arrival_utime) / 1000.0);
+    ptz_wait_ms_.push_back(p->ptz_wait_us / 1000.0);
+  }
+
+  // A decoded image encoded as configured, or a source's JPEG as it is (moved into the message).
+  ptzstereo::image_t imageMessage(CapturedFrame* f, const PtzPose& pose) {
+    if (f->jpeg.empty()) return encodeImage(f->image, pose, encoding_, jpeg_quality_);
+    ptzstereo::image_t m{};
+    m.width = f->jpeg_size.width;
+    m.height = f->jpeg_size.height;
+    m.pixel_format = ptzstereo::image_t::PIXEL_BGR8;  // what a decoder makes of 3 components
+    m.row_stride = m.width * 3;                       // as encodeImage sets it
+    m.encoding = ptzstereo::image_t::ENCODING_JPEG;
+    m.pan_rad = pose.pan_rad;
+    m.tilt_rad = pose.tilt_rad;
+    m.zoom = pose.zoom;
+    m.data = std::move(f->jpeg);
+    m.data_size = static_cast<int32_t>(m.data.size());
+    return m;
+  }
+
+  // libjpeg's DCT scaling: up to 8x smaller, still at least the preview's width.
+  cv::Mat reducedDecode(const std::vector<uint8_t>& jpeg, int width) const {
+    int flag = cv::IMREAD_COLOR;
+    if (width >= 8 * preview_width_px_) {
+      flag = cv::IMREAD_REDUCED_COLOR_8;
+    } else if (width >= 4 * preview_width_px_) {
+      flag = cv::IMREAD_REDUCED_COLOR_4;
+    } else if (width >= 2 * preview_width_px_) {
+      flag = cv::IMREAD_REDUCED_COLOR_2;
+    }
+    return cv::imdecode(jpeg, flag);
   }
 
   void report(int64_t now) {
@@ -173,6 +225,8 @@ class CameraNode {
   RateLimitedLog log_;
   int8_t encoding_;
   int jpeg_quality_;
+  RateSchedule preview_due_;  // mirrors preview_'s schedule
+  int preview_width_px_;
   std::string ch_frame_, ch_state_;
   std::shared_ptr<FrameNotifier> notifier_ = std::make_shared<FrameNotifier>();
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_state_t>> states_;

@@ -230,6 +230,7 @@ StampedPair StereoCamera::stamp(Held h, int64_t now_utime) {
   if (newest && *newest < std::max(pair.left.capture_utime, pair.right.capture_utime)) {
     ++ptz_extrapolated_;  // no state at or after its capture came in time: the newest one
   }
+  passed_through_ += (pair.left.jpeg.empty() ? 0 : 1) + (pair.right.jpeg.empty() ? 0 : 1);
   sp.first_arrival_utime = pair.first_arrival_utime;
   sp.ptz_wait_us = now_utime - h.made_utime;
   sp.left = std::move(pair.left);
@@ -268,6 +269,12 @@ Health StereoCamera::health(int64_t now_utime, std::string* message) const {
   }
   for (size_t s = 0; s < 2; ++s) {
     if (ended_[s] && !ended_[1 - s]) warnings.push_back(std::string(kSide[s]) + " source ended");
+    // A recording does not heal: the last file skipped stays named.
+    if (sources_[s].skipped() > 0) {
+      warnings.push_back(std::string(kSide[s]) +
+                         " source: " + std::to_string(sources_[s].skipped()) +
+                         " image file(s) skipped, the last: " + sources_[s].lastSkipped());
+    }
   }
   if (!errors.empty()) {
     *message = joined(errors);
@@ -288,9 +295,11 @@ std::map<std::string, int64_t> StereoCamera::counters() const {
     c["reconnects_" + side] = sources_[s].reconnects();
     c["source_overflow_" + side] = sources_[s].overflowed();
     c["ended_" + side] = ended_[s] ? 1 : 0;
+    c["skipped_files_" + side] = sources_[s].skipped();
   }
   c["pairs"] = pairer_.pairs();
   c["pairs_skipped_rate"] = skipped_rate_;
+  c["images_passed_through"] = passed_through_;
   c["ptz_stale"] = ptz_stale_;
   c["ptz_extrapolated"] = ptz_extrapolated_;
   c["ptz_history_restarts"] = history_.restarts();

@@ -91,6 +91,7 @@ class StereoCamera {
   std::array<bool, 2> ended_{false, false};
   std::array<int64_t, 2> resized_{0, 0}, buffer_stamped_{0, 0};
   int64_t skipped_rate_ = 0, ptz_stale_ = 0, ptz_extrapolated_ = 0;
+  int64_t passed_through_ = 0;  // images released as their source's JPEG bytes
   bool last_stale_ = false, published_any_ = false;
   int64_t next_allowed_utime_ = 0;
 };

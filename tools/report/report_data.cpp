@@ -216,11 +216,14 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
         obj.left_index >= 0 && obj.left_index < det->second.num_left && obj.right_index >= 0 &&
         obj.right_index < det->second.num_right) {
       const double cx = (size->second.first - 1) / 2.0, cy = (size->second.second - 1) / 2.0;
+      // In VGA-equivalent pixels, as summary.json's centring (run_metrics): one scale for all
+      // sizes.
+      const double to_vga = 640.0 / std::max(1, size->second.first);
       const auto& l = det->second.left[static_cast<size_t>(obj.left_index)];
       const auto& r = det->second.right[static_cast<size_t>(obj.right_index)];
       d.centring.push_back({t_s,
-                            {l.centroid_x_px - cx, l.centroid_y_px - cy, r.centroid_x_px - cx,
-                             r.centroid_y_px - cy}});
+                            {(l.centroid_x_px - cx) * to_vga, (l.centroid_y_px - cy) * to_vga,
+                             (r.centroid_x_px - cx) * to_vga, (r.centroid_y_px - cy) * to_vga}});
       d.centring_source = "OBJECT_DETECTIONS";
     }
   }

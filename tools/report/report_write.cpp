@@ -120,7 +120,7 @@ std::string gnuplotScript(const ReportData& d) {
     g << "set output " << q << "centring.png'\nset title 'Centring error: "
       << (d.centring_source == "SIM_TRUTH" ? "the true target" : "the detected target")
       << " to the image centre (" << d.centring_source << ")'\n"
-      << "set xlabel 'time (s)'\nset ylabel 'distance from the image centre (px)'\n"
+      << "set xlabel 'time (s)'\nset ylabel 'distance from the image centre (VGA-equivalent px)'\n"
       << "plot " << q << "centring.csv' using 1:6 skip 1 with lines lw 2 title 'left camera', " << q
       << "centring.csv' using 1:7 skip 1 with lines lw 2 title 'right camera'\nunset title\n";
   }

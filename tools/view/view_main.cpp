@@ -33,6 +33,7 @@ class ViewNode {
         max_wait_us_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)),
         screenshot_dir_(p.getString("screenshot_dir")),
         screenshot_after_(p.getInt("screenshot_after_frames")),
+        max_window_width_px_(p.getInt("max_window_width_px")),
         preview_(p.getBool("preview")),
         ch_frame_(channel(p, preview_ ? channels::kStereoPreview : channels::kStereoFrame)),
         ch_select_(channel(p, channels::kTargetSelect)) {
@@ -73,7 +74,8 @@ class ViewNode {
             if (c.name == "delay_us_p99") delay_ms_p99_ = c.value / 1000.0;
           }
         });
-    cv::namedWindow(kWindow, cv::WINDOW_AUTOSIZE | cv::WINDOW_GUI_NORMAL);
+    // Resizable, so that two 1080p images fit a screen; HighGUI maps clicks back to the canvas.
+    cv::namedWindow(kWindow, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO | cv::WINDOW_GUI_NORMAL);
     cv::moveWindow(kWindow, 0, 0);
     cv::setMouseCallback(kWindow, &ViewNode::onMouse, this);
   }
@@ -211,6 +213,12 @@ class ViewNode {
     in.paused = paused_;
     canvas_ = drawView(rig_, in);
     canvas_seq_ = seq;
+    if (canvas_.size() != window_canvas_size_) {  // the first frame, or another image size
+      window_canvas_size_ = canvas_.size();
+      const double scale = std::min(1.0, max_window_width_px_ / canvas_.cols);
+      cv::resizeWindow(kWindow, static_cast<int>(canvas_.cols * scale),
+                       static_cast<int>(canvas_.rows * scale));
+    }
     cv::imshow(kWindow, canvas_);
     status_.increment("frames_drawn");
     status_.setCounter("last_frame_drawn", seq);
@@ -242,6 +250,7 @@ class ViewNode {
   int64_t max_wait_us_;
   std::string screenshot_dir_;
   int64_t screenshot_after_;
+  double max_window_width_px_;
   bool preview_;
   std::string ch_frame_, ch_select_;
   std::optional<Pending> pending_;
@@ -255,6 +264,7 @@ class ViewNode {
   double delay_ms_p50_ = NAN, delay_ms_p99_ = NAN;
   std::deque<int64_t> frame_times_us_, drawn_times_us_;
   cv::Mat canvas_;
+  cv::Size window_canvas_size_;  // the canvas size the window was last sized for
   int64_t canvas_seq_ = 0;
   bool paused_ = false, step_ = false;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
@@ -285,6 +295,9 @@ int main(int argc, char** argv) {
   params.add("preview", false,
              "draw STEREO_PREVIEW (the small copies a camera host sends over a LAN, scaled up) "
              "instead of STEREO_FRAME");
+  params.add("max_window_width_px", 1920, "px",
+             "the window is scaled down to this width when the two images are wider (1080p)",
+             Range::between(320, 16384));
   params.add("screenshot_dir", ".", "where the s key (and screenshot_after_frames) saves PNGs");
   params.add("screenshot_after_frames", 0, "", "save one screenshot after this many frames",
              Range::atLeast(0));

@@ -1,6 +1,7 @@
 #include "ptz_driver/cameras/sources/capture_source.hpp"
 
 #include "common/measure.hpp"
+#include "ptz_driver/cameras/sources/jpeg_file.hpp"
 
 #include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -20,6 +22,14 @@ namespace {
 
 std::atomic<int> g_abandoned{0};
 
+bool isJpegName(const std::string& path) {
+  const auto dot = path.rfind('.');
+  if (dot == std::string::npos) return false;
+  std::string ext = path.substr(dot);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".jpg" || ext == ".jpeg";
+}
+
 // What the reader thread and its FrameSource share; kept alive by both.
 struct Shared {
   std::mutex m;
@@ -29,6 +39,8 @@ struct Shared {
   FrameSource::Poll terminal = FrameSource::Poll::kNothing;
   std::string error;
   int64_t overflowed = 0;
+  int64_t skipped = 0;       // image files that did not decode
+  std::string last_skipped;  // why the last was skipped
 };
 
 // The reader thread: opens the source, reads, stamps, paces files, hands frames over.
@@ -62,7 +74,7 @@ class Reader {
         break;
       }
       f.index = index_++;
-      f.resized = normaliseImage(&f.image, o_.width, o_.height);
+      if (f.jpeg.empty()) f.resized = normaliseImage(&f.image, o_.width, o_.height);
       if (!deliver(std::move(f))) break;
     }
     if (!finished_) finish(FrameSource::Poll::kNothing, "");
@@ -135,34 +147,43 @@ class Reader {
     return true;
   }
 
-  // The next frame of a file or folder, stamped and due; false when it ended (or stopped).
+  // The next frame of a file or folder, stamped and due; false when it ended (or stopped). An
+  // image file that does not decode is skipped and counted (its time too: the others keep theirs).
   bool readFile(CapturedFrame* f) {
     for (;;) {
       const size_t i = static_cast<size_t>(file_index_);
-      bool got = false;
-      std::string end_reason;
+      bool got = false, bad = false;
+      std::string end_reason, why;
       if (!files_.empty()) {
         if (i < files_.size()) {
-          f->image = cv::imread(files_[i], cv::IMREAD_COLOR);
-          got = !f->image.empty();
-          if (!got) end_reason = "image file '" + files_[i] + "' does not decode";
+          got = readImageFile(files_[i], f, &why);
+          bad = !got;
         }
       } else {
         got = cap_.read(f->image) && !f->image.empty();
       }
-      if (got && !o_.timestamps.empty() && i >= o_.timestamps.size()) {
-        got = false;
+      if ((got || bad) && !o_.timestamps.empty() && i >= o_.timestamps.size()) {
+        got = bad = false;
         end_reason = "its timestamps file ends after " + std::to_string(i) + " times";
       }
-      if (got) {
+      if (got || bad) {
         const int64_t t = o_.timestamps.empty()
                               ? base_utime_ + std::llround(file_index_ * 1e6 / file_fps_)
                               : o_.timestamps[i];
         if (file_index_ == 0) first_utime_ = t;
         last_utime_ = t;
         ++file_index_;
+        if (bad) {
+          skip(why);
+          if (stopped()) return false;
+          continue;
+        }
+        delivered_in_pass_ = true;
         f->capture_utime = t + loop_offset_us_;
         return waitUntil(clock_->dueUtime(f->capture_utime));
+      }
+      if (end_reason.empty() && file_index_ > 0 && !delivered_in_pass_) {
+        end_reason = "none of its " + std::to_string(file_index_) + " image files decodes";
       }
       if (!o_.loop || file_index_ == 0 || !end_reason.empty() || stopped()) {
         finish(FrameSource::Poll::kEnded, end_reason);
@@ -173,11 +194,39 @@ class Reader {
       const int64_t span = last_utime_ - first_utime_;
       loop_offset_us_ += span + (n > 1 ? span / (n - 1) : std::llround(1e6 / file_fps_));
       file_index_ = 0;
+      delivered_in_pass_ = false;
       if (files_.empty() && !cap_.open(spec_.text, cv::CAP_ANY)) {
         finish(FrameSource::Poll::kEnded, "it does not open again to loop");
         return false;
       }
     }
+  }
+
+  // A JPEG of the published size, when its output is JPEG, as its bytes; anything else decoded.
+  bool readImageFile(const std::string& path, CapturedFrame* f, std::string* why) {
+    if (!o_.pass_jpeg || !isJpegName(path)) {
+      f->image = cv::imread(path, cv::IMREAD_COLOR);
+    } else {
+      std::vector<uint8_t> bytes;
+      if (!readFileBytes(path, &bytes, why)) return false;
+      std::string not_passed;
+      int w = 0, h = 0;
+      if (checkPassThroughJpeg(bytes.data(), bytes.size(), o_.width, o_.height, &w, &h,
+                               &not_passed)) {
+        f->jpeg = std::move(bytes);
+        f->jpeg_size = cv::Size(w, h);
+        return true;
+      }
+      f->image = cv::imdecode(bytes, cv::IMREAD_COLOR);  // another size, or not a plain JPEG
+    }
+    if (f->image.empty()) *why = "image file '" + path + "' does not decode";
+    return !f->image.empty();
+  }
+
+  void skip(const std::string& why) {
+    std::lock_guard<std::mutex> lock(sh_->m);
+    ++sh_->skipped;
+    sh_->last_skipped = why;
   }
 
   bool stopped() {
@@ -235,6 +284,7 @@ class Reader {
   int64_t index_ = 0, file_index_ = 0;
   int64_t base_utime_ = 0, first_utime_ = 0, last_utime_ = 0, loop_offset_us_ = 0;
   bool finished_ = false;
+  bool delivered_in_pass_ = false;  // a frame since the file's start (a loop needs one)
 };
 
 class CaptureSource : public FrameSource {
@@ -281,6 +331,16 @@ class CaptureSource : public FrameSource {
   int64_t overflowed() const override {
     std::lock_guard<std::mutex> lock(sh_->m);
     return sh_->overflowed;
+  }
+
+  int64_t skipped() const override {
+    std::lock_guard<std::mutex> lock(sh_->m);
+    return sh_->skipped;
+  }
+
+  std::string lastSkipped() const override {
+    std::lock_guard<std::mutex> lock(sh_->m);
+    return sh_->last_skipped;
   }
 
  private:

@@ -25,6 +25,9 @@ struct CaptureOptions {
   double file_fps = 0;              // files without timestamps (0: the video's rate; folders 30)
   bool loop = false;                // files: start again at the end, times continuing
   size_t queue_frames = 4;          // frames waiting for the consumer (live: the oldest dropped)
+  // Folders: a JPEG file of the published size is delivered as its bytes (CapturedFrame::jpeg),
+  // not decoded; set when STEREO_FRAME carries JPEG.
+  bool pass_jpeg = false;
 };
 
 // Maps recorded capture times to wall-clock times for real-time playback, shared by both sides

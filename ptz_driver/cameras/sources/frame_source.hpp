@@ -51,7 +51,11 @@ std::vector<int64_t> readTimestamps(const std::string& path);
 std::vector<std::string> listImageFiles(const std::string& folder);
 
 struct CapturedFrame {
-  cv::Mat image;
+  cv::Mat image;  // decoded (8-bit BGR); empty when the frame is only jpeg
+  // The JPEG as the source delivered it, checked (checkPassThroughJpeg) and of the published
+  // size: published as it is, decoded only for what needs pixels (previews).
+  std::vector<uint8_t> jpeg;
+  cv::Size jpeg_size;
   int64_t capture_utime = 0;  // live: grab (V4L2: buffer) time minus latency; files: recorded
   bool buffer_time = false;   // stamped from the V4L2 buffer's time, not the grab's
   int64_t index = 0;          // frame number within this connection (files: within the file)
@@ -70,6 +74,10 @@ class FrameSource {
   virtual std::string error() const = 0;
   // Frames the reader dropped because nobody took them in time (live sources).
   virtual int64_t overflowed() const { return 0; }
+  // Image files of a folder that did not decode, skipped (their partners go unmatched), and why
+  // the last one was (naming the file).
+  virtual int64_t skipped() const { return 0; }
+  virtual std::string lastSkipped() const { return ""; }
 };
 
 // Makes a new connection each time it is called (the supervisor's reconnects).

@@ -17,6 +17,7 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
   if (state_ == State::kWaiting) {
     if (!retry_.due(now_s)) return;
     source_ = factory_();
+    skipped_in_source_ = 0;
     state_ = State::kConnecting;
     attempt_start_s_ = now_s;
     had_frame_ = false;
@@ -28,6 +29,7 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
       break;
     }
     const FrameSource::Poll r = source_->poll(&frame);
+    noteSkipped();
     if (r == FrameSource::Poll::kNothing) break;
     if (r == FrameSource::Poll::kFrame) {
       frames->push_back(std::move(frame));
@@ -58,6 +60,16 @@ void SourceSupervisor::step(double now_s, std::vector<CapturedFrame>* frames, si
   } else if (state_ == State::kConnecting && now_s - attempt_start_s_ > params_.open_timeout_s) {
     giveUp(now_s, "no frame " + secondsText(now_s - attempt_start_s_) + " after opening");
   }
+}
+
+void SourceSupervisor::noteSkipped() {
+  const int64_t n = source_->skipped();
+  if (n == skipped_in_source_) return;
+  skipped_ += n - skipped_in_source_;
+  skipped_in_source_ = n;
+  last_skipped_ = source_->lastSkipped();
+  events_.push_back(name_ + ": " + last_skipped_ + ", skipped (" + std::to_string(skipped_) +
+                    " so far)");
 }
 
 void SourceSupervisor::giveUp(double now_s, const std::string& why) {

@@ -42,6 +42,9 @@ class SourceSupervisor {
   int64_t reconnects() const { return reconnects_; }
   int64_t frames() const { return frames_; }
   int64_t overflowed() const;
+  // Image files skipped because they did not decode, and why the last one was ("" when none).
+  int64_t skipped() const { return skipped_; }
+  const std::string& lastSkipped() const { return last_skipped_; }
   // When the next attempt starts (kWaiting) and the back-off after the next failure.
   double retryAtS() const { return retry_.retryAtS(); }
   double nextDelayS() const { return retry_.nextDelayS(); }
@@ -53,6 +56,7 @@ class SourceSupervisor {
 
  private:
   void giveUp(double now_s, const std::string& why);
+  void noteSkipped();  // before the connection is dropped
 
   std::string name_;
   SourceFactory factory_;
@@ -65,6 +69,8 @@ class SourceSupervisor {
   bool had_frame_ = false;  // in this connection
   int64_t reconnects_ = 0, frames_ = 0, overflowed_done_ = 0;
   std::string why_;  // the last failure
+  int64_t skipped_ = 0, skipped_in_source_ = 0;
+  std::string last_skipped_;
   std::vector<std::string> events_;
 };
 
