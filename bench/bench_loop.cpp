@@ -88,7 +88,8 @@ std::vector<std::string> niced(const std::string& priority, std::vector<std::str
   return argv;
 }
 
-void run(const Run& r) {
+// False when a process never came up or no frame was answered: nothing to report then.
+bool run(const Run& r) {
   lcm::LCM lcm(ptz::test::kTestUrl);
   Listener l;
   lcm.subscribe("STEREO_FRAME", &Listener::onFrame, &l);
@@ -109,13 +110,17 @@ void run(const Run& r) {
         niced(r.priority, {PTZ_DEPTH_BIN, "--lcm-url", url, "--image-size", r.image_size,
                            "--follow-target", "false", "--cloud-preview-rate-hz", "0"}));
   }
-  ptz::test::handleUntil(
-      lcm,
-      [&] {
-        return l.counters["ptz-detect"]["up"] && l.counters["ptz-control"]["up"] &&
-               (!r.depth || l.counters["ptz-depth"]["up"]);
-      },
-      20s);
+  if (!ptz::test::handleUntil(
+          lcm,
+          [&] {
+            return l.counters["ptz-detect"]["up"] && l.counters["ptz-control"]["up"] &&
+                   (!r.depth || l.counters["ptz-depth"]["up"]);
+          },
+          20s)) {
+    std::fprintf(stderr, "ptz_bench_loop: %s: ptz-detect, ptz-control or ptz-depth never came up\n",
+                 r.name.c_str());
+    return false;
+  }
   std::vector<std::string> source_argv =
       r.recording.empty() ? std::vector<std::string>{PTZ_SIM_BIN,
                                                      "--lcm-url",
@@ -199,11 +204,25 @@ void run(const Run& r) {
   const int64_t published = r.recording.empty() ? c["ptz-sim"]["frames_published"]
                                                 : c["ptz-camera"]["messages:STEREO_FRAME"];
   const int64_t skipped = c["ptz-sim"]["frames_skipped_late"];
+  if (published == 0 || s.chain.empty()) {
+    std::fprintf(stderr, "ptz_bench_loop: %s: %lld frames published, %zu answered: no numbers\n",
+                 r.name.c_str(), static_cast<long long>(published), s.chain.size());
+    return false;
+  }
+  const int64_t depth_frames = c["ptz-depth"]["frames_processed"];
+  // A recording is not rendered: its readout is its lateness against its schedule, and nothing
+  // is skipped late by a simulator.
+  const bool rec = !r.recording.empty();
+  char skipped_cell[64];
+  std::snprintf(skipped_cell, sizeof skipped_cell, "%lld of %lld", static_cast<long long>(skipped),
+                static_cast<long long>(published + skipped));
   std::printf("%s: %s at %.0f Hz, %.0f s realtime from %s, JPEG, ptz-depth %s:\n", r.name.c_str(),
               r.image_size.c_str(), r.rate_hz, r.seconds,
               r.recording.empty() ? "ptz-sim" : "a recording played by ptz-camera",
               r.depth ? ("beside (" + r.priority + ")").c_str() : "off");
-  line("capture -> STEREO_FRAME publish (render, encode)", s.readout);
+  line(rec ? "schedule -> STEREO_FRAME publish (lateness)"
+           : "capture -> STEREO_FRAME publish (render, encode)",
+       s.readout);
   line("STEREO_FRAME publish -> OBJECT_POSE publish", s.detect);
   line("STEREO_FRAME publish -> setpoint publish (chain)", s.chain);
   line("capture -> setpoint publish", s.loop);
@@ -212,8 +231,7 @@ void run(const Run& r) {
       "  frames published %lld, skipped late by ptz-sim %lld, received here %zu, not "
       "answered by ptz-detect %lld; ptz-depth processed %lld\n",
       static_cast<long long>(published), static_cast<long long>(skipped), s.readout.size(),
-      static_cast<long long>(unanswered),
-      static_cast<long long>(c["ptz-depth"]["frames_processed"]));
+      static_cast<long long>(unanswered), static_cast<long long>(depth_frames));
   auto& d = c["ptz-detect"];
   std::printf(
       "  ptz-detect's own last status: processing p50 %.2f p99 %.2f ms, box yaws p50 %.2f "
@@ -222,12 +240,14 @@ void run(const Run& r) {
       d["orientation_us_p99"] / 1e3, static_cast<long long>(d["orientations_estimated"]),
       static_cast<long long>(d["frames_scanned_full"]),
       static_cast<long long>(d["frames_scanned_windowed"]));
-  std::printf("ROW | %s | %s, depth %s | %s | %s | %s | %s | %s | %lld of %lld | %lld |\n",
+  std::printf("ROW | %s | %s, depth %s | %s%s | %s | %s | %s | %s | %s | %lld of %lld | %lld |\n",
               r.name.c_str(), r.loop_priority.c_str(), r.depth ? r.priority.c_str() : "off",
-              cell(s.readout).c_str(), cell(s.detect).c_str(), cell(s.chain).c_str(),
-              cell(s.loop).c_str(), cell(s.delivery).c_str(), static_cast<long long>(skipped),
-              static_cast<long long>(published + skipped), static_cast<long long>(unanswered));
+              rec ? "lateness " : "", cell(s.readout).c_str(), cell(s.detect).c_str(),
+              cell(s.chain).c_str(), cell(s.loop).c_str(), cell(s.delivery).c_str(),
+              rec ? "— (a recording)" : skipped_cell, static_cast<long long>(unanswered),
+              static_cast<long long>(published), static_cast<long long>(depth_frames));
   std::fflush(stdout);
+  return true;
 }
 
 }  // namespace
@@ -280,8 +300,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "ptz_bench_loop: unknown run '%s'\n", name.c_str());
       return 2;
     }
-    run(r);
+    const bool reported = run(r);
     if (!r.recording.empty()) std::filesystem::remove_all(r.recording);
+    if (!reported) return 1;
   }
   return 0;
 }

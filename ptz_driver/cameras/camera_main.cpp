@@ -136,19 +136,22 @@ class CameraNode {
       msg.left = imageMessage(&p->left, p->left_pose);
       msg.right = imageMessage(&p->right, p->right_pose);
     }
-    // Previews need pixels: a passed-through JPEG is decoded (reduced) only when one is due.
     const bool preview = preview_due_.take(msg.utime);
+    msg.publish_utime = wallUtime();
+    status_.publishOn(bulk_out_.lcm(), ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
+    // Previews need pixels: a passed-through JPEG is decoded (reduced) only when one is due, and
+    // after the frame went out, so that the loop never waits for it. Its schedule takes exactly
+    // when preview_due_ does: the same rate and the same times.
     if (preview) {
       for (auto [f, image] : {std::pair{&p->left, &msg.left}, {&p->right, &msg.right}}) {
         if (f->image.empty()) f->image = reducedDecode(image->data, f->jpeg_size.width);
       }
-    }
-    msg.publish_utime = wallUtime();
-    status_.publishOn(bulk_out_.lcm(), ch_frame_, msg, (msg.publish_utime - msg.utime) / 1000.0);
-    // Its schedule takes exactly when preview_due_ does: the same rate and the same times.
-    if (preview) {
-      preview_.maybePublish(status_, *lcm_, msg.utime, msg.seq, p->left.image, p->left_pose,
-                            p->right.image, p->right_pose);
+      if (p->left.image.empty() || p->right.image.empty()) {
+        status_.increment("previews_undecodable");
+      } else {
+        preview_.maybePublish(status_, *lcm_, msg.utime, msg.seq, p->left.image, p->left_pose,
+                              p->right.image, p->right_pose);
+      }
     }
     wait_ms_.push_back((msg.publish_utime - p->first_arrival_utime) / 1000.0);
     ptz_wait_ms_.push_back(p->ptz_wait_us / 1000.0);
