@@ -80,7 +80,7 @@ std::string cell(const std::vector<double>& v) {
   return s;
 }
 
-std::vector<std::string> niced(const std::string& priority, std::vector<std::string> argv) {
+std::vector<std::string> withPriority(const std::string& priority, std::vector<std::string> argv) {
   if (priority == "fifo") argv.insert(argv.begin(), {"/usr/bin/chrt", "--fifo", "10"});
   if (priority == "high") argv.insert(argv.begin(), {"/usr/bin/nice", "-n", "-10"});
   if (priority == "idle") argv.insert(argv.begin(), {"/usr/bin/chrt", "--idle", "0"});
@@ -101,14 +101,14 @@ bool run(const Run& r) {
       PTZ_DETECT_BIN, "--lcm-url", url, "--config", PTZ_SOURCE_DIR "/config/detect_default.yaml",
       "--image-size", r.image_size};
   detect_argv.insert(detect_argv.end(), r.detect_flags.begin(), r.detect_flags.end());
-  ptz::test::ChildProcess detect(niced(r.loop_priority, detect_argv));
-  ptz::test::ChildProcess control(
-      niced(r.loop_priority, {PTZ_CONTROL_BIN, "--lcm-url", url, "--image-size", r.image_size}));
+  ptz::test::ChildProcess detect(withPriority(r.loop_priority, detect_argv));
+  ptz::test::ChildProcess control(withPriority(
+      r.loop_priority, {PTZ_CONTROL_BIN, "--lcm-url", url, "--image-size", r.image_size}));
   std::unique_ptr<ptz::test::ChildProcess> depth;
   if (r.depth) {
     depth = std::make_unique<ptz::test::ChildProcess>(
-        niced(r.priority, {PTZ_DEPTH_BIN, "--lcm-url", url, "--image-size", r.image_size,
-                           "--follow-target", "false", "--cloud-preview-rate-hz", "0"}));
+        withPriority(r.priority, {PTZ_DEPTH_BIN, "--lcm-url", url, "--image-size", r.image_size,
+                                  "--follow-target", "false", "--cloud-preview-rate-hz", "0"}));
   }
   if (!ptz::test::handleUntil(
           lcm,
@@ -154,7 +154,7 @@ bool run(const Run& r) {
                                                      "true",
                                                      "--status-period-s",
                                                      "0.5"};
-  ptz::test::ChildProcess source(niced(r.loop_priority, source_argv));
+  ptz::test::ChildProcess source(withPriority(r.loop_priority, source_argv));
   if (r.recording.empty()) {
     ptz::test::handleUntil(
         lcm, [&] { return source.wait(0ms) >= 0; }, std::chrono::seconds(int(r.seconds) + 60));

@@ -22,6 +22,13 @@ class FileStorage;
 
 namespace ptz {
 
+// VGA-equivalent pixels: an image's pixels times kVgaWidthPx / its width. atSize keeps the field of
+// view, so centring errors and target sizes in these units compare across image sizes.
+constexpr double kVgaWidthPx = 640;
+inline double vgaPxPerPx(int width_px) {
+  return kVgaWidthPx / (width_px > 0 ? width_px : 1);
+}
+
 enum class Side { kLeft = 0, kRight = 1 };
 const char* sideName(Side side);
 

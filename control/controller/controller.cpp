@@ -82,7 +82,7 @@ double Controller::zoomFor(Side side, const Observation& o, const PtzPose& at_ca
   Eigen::Vector3d c;
   rig_.cameraPose(side, at_capture.pan_rad, at_capture.tilt_rad, &R, &c);
   const double range = (o.position_head_m - c).norm();
-  const double radius_px = p_.target_radius_vga_px * rig_.camera(side).width / 640.0;
+  const double radius_px = p_.target_radius_vga_px * rig_.camera(side).width / kVgaWidthPx;
   const double fx = radius_px * range / o.radius_m;
   return std::min(zoomForFocalLength(rig_.camera(side), fx), p_.max_zoom);
 }

@@ -7,13 +7,12 @@
 //              --encoding jpeg [--loop true]
 #pragma once
 
-#include <sys/stat.h>
-
 #include <opencv2/core.hpp>
 
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <stdexcept>
@@ -44,12 +43,6 @@ inline void writeBytes(const std::string& path, const std::vector<uint8_t>& byte
   if (!out) throw std::runtime_error("writeSimRecording: cannot write " + path);
 }
 
-inline void makeDir(const std::string& path) {
-  if (::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) {
-    throw std::runtime_error("writeSimRecording: cannot create " + path);
-  }
-}
-
 }  // namespace detail
 
 // Renders `frames` stereo frames of sim_config_yaml's scene (its scene, objects, chessboard and
@@ -75,9 +68,8 @@ inline SimRecording writeSimRecording(const std::string& dir, const std::string&
   const double noise = fs["noise_sigma"].empty() ? 2.0 : static_cast<double>(fs["noise_sigma"]);
   sim::Simulator sim(StereoRig::makeDefault().atSize(rec.width, rec.height), std::move(scene),
                      defaultPlantParams(), noise, 1);
-  detail::makeDir(dir);
-  detail::makeDir(dir + "/left");
-  detail::makeDir(dir + "/right");
+  std::filesystem::create_directories(dir + "/left");  // throws naming the path
+  std::filesystem::create_directories(dir + "/right");
   std::ofstream ts_left(dir + "/left.timestamps"), ts_right(dir + "/right.timestamps");
   const auto jpeg = [jpeg_quality](const cv::Mat& image) {
     return encodeImage(image, ptzstereo::image_t::ENCODING_JPEG, jpeg_quality).data;

@@ -16,7 +16,6 @@ namespace {
 
 // A share of an object's pixels that counts as all of them (antialiased edges, rounding).
 constexpr double kFullyVisible = 0.98;
-constexpr double kVgaWidthPx = 640;
 
 CameraView toView(const ptzstereo::camera_model_t& m) {
   CameraView v;
@@ -49,7 +48,7 @@ bool offsetFromCentre(const CameraView& v, const Eigen::Vector3d& p, double* dx,
   const Eigen::Vector2d& px = *inside ? distorted : pinhole;
   if (!px.allFinite()) return false;
   // VGA-equivalent px: the same share of the image at every resolution.
-  const double to_vga = kVgaWidthPx / v.width;
+  const double to_vga = vgaPxPerPx(v.width);
   *dx = (px.x() - (v.width - 1) / 2.0) * to_vga;
   *dy = (px.y() - (v.height - 1) / 2.0) * to_vga;
   return true;

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/rig.hpp"
 #include "common/transport.hpp"
 #include "control/stability/stability.hpp"
 #include "ptzstereo/object_detections_t.hpp"
@@ -216,9 +217,8 @@ ReportData collectReport(LogReader& log, const ReportOptions& o) {
         obj.left_index >= 0 && obj.left_index < det->second.num_left && obj.right_index >= 0 &&
         obj.right_index < det->second.num_right) {
       const double cx = (size->second.first - 1) / 2.0, cy = (size->second.second - 1) / 2.0;
-      // In VGA-equivalent pixels, as summary.json's centring (run_metrics): one scale for all
-      // sizes.
-      const double to_vga = 640.0 / std::max(1, size->second.first);
+      // In VGA-equivalent pixels, as summary.json's centring (run_metrics).
+      const double to_vga = vgaPxPerPx(size->second.first);
       const auto& l = det->second.left[static_cast<size_t>(obj.left_index)];
       const auto& r = det->second.right[static_cast<size_t>(obj.right_index)];
       d.centring.push_back({t_s,
