@@ -256,7 +256,8 @@ int main(int argc, char** argv) {
   ptz::Params p("ptz_bench_loop", "The closed loop in real time across processes.");
   p.add("runs", "vga30,vga60,1080p30,1080p30-rec,1080p30-rec-480",
         "comma-separated runs: vga30, vga60, 1080p30 (the simulator rendering 1080p), "
-        "1080p30-rec (a 10 s recording of it played in a loop by ptz-camera), 1080p30-rec-480 "
+        "1080p30-rec (a recording of it, one period of the ball's path, played in a loop by "
+        "ptz-camera), 1080p30-rec-480 "
         "(the same, ptz-detect's full scans on the image reduced to 480 px)");
   p.add("seconds", 60.0, "s", "realtime duration of each run", ptz::Range::between(1, 3600));
   p.add("depth", true, "ptz-depth beside the loop");
@@ -267,6 +268,21 @@ int main(int argc, char** argv) {
   p.add("csv_dir", "", "folder for a CSV of each run's per-frame times (empty: none)");
   if (!p.parse(argc, argv)) return 0;
   std::string runs = p.getString("runs");
+  // The 1080p runs' recording, made once: one period of the ball's path, so that the loop goes on
+  // without a jump (a jump is a lost target and full scans, which a camera never shows).
+  std::string recording;
+  const auto record = [&recording]() -> bool {
+    if (!recording.empty()) return true;
+    char dir[] = "/tmp/ptz_bench_loop_XXXXXX";
+    if (!mkdtemp(dir)) return false;
+    recording = dir;
+    const char* config = PTZ_SOURCE_DIR "/config/sim_default.yaml";
+    const int frames = static_cast<int>(std::lround(ptz::test::simBallPeriodS(config) * 30.0));
+    const auto rec = ptz::test::writeSimRecording(recording, config, "1080p", frames, 30.0, 90);
+    std::printf("recorded %d stereo frames at 1080p in %s (the ball in both images in %d)\n",
+                frames, dir, rec.frames_ball_visible);
+    return true;
+  };
   for (size_t start = 0; start <= runs.size();) {
     const size_t comma = std::min(runs.find(',', start), runs.size());
     const std::string name = runs.substr(start, comma - start);
@@ -289,20 +305,17 @@ int main(int argc, char** argv) {
       if (name == "1080p30-rec-480")
         r.detect_flags.insert(r.detect_flags.end(), {"--full-scan-max-width-px", "480"});
       r.image_size = "1080p";
-      char dir[] = "/tmp/ptz_bench_loop_XXXXXX";
-      if (!mkdtemp(dir)) return 1;
-      r.recording = dir;
-      const auto rec = ptz::test::writeSimRecording(
-          r.recording, PTZ_SOURCE_DIR "/config/sim_default.yaml", "1080p", 300, 30.0, 90);
-      std::printf("recorded 300 stereo frames at 1080p in %s (the ball in both images in %d)\n",
-                  dir, rec.frames_ball_visible);
+      if (!record()) return 1;
+      r.recording = recording;
     } else {
       std::fprintf(stderr, "ptz_bench_loop: unknown run '%s'\n", name.c_str());
       return 2;
     }
-    const bool reported = run(r);
-    if (!r.recording.empty()) std::filesystem::remove_all(r.recording);
-    if (!reported) return 1;
+    if (!run(r)) {
+      if (!recording.empty()) std::filesystem::remove_all(recording);
+      return 1;
+    }
   }
+  if (!recording.empty()) std::filesystem::remove_all(recording);
   return 0;
 }

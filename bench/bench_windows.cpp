@@ -82,9 +82,10 @@ perception::ImagePixels fromJpeg(const std::vector<uint8_t>& jpeg, cv::Size size
             return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height,
                                                  rects, parts, why);
           },
-          [&jpeg, size](int scale, cv::Mat* reduced, std::string* why) {
-            return perception::decodeJpegReduced(jpeg.data(), jpeg.size(), size.width, size.height,
-                                                 scale, reduced, why);
+          [&jpeg, size](int scale, int row0, int row1, cv::Mat* reduced, std::string* why) {
+            return perception::decodeJpegReducedRows(
+                perception::JpegRestartIndex(jpeg.data(), jpeg.size()), size.width, size.height,
+                scale, row0, row1, reduced, why);
           }};
 }
 

@@ -150,10 +150,16 @@ ptzstereo::image_t encodeImage(const cv::Mat& image, int8_t encoding, int jpeg_q
   msg.encoding = encoding;
   msg.zoom = 1.0;
   if (encoding == ptzstereo::image_t::ENCODING_JPEG) {
-    // A restart at every MCU row (4:2:0: 16 px; gray 8): windows decode alone (jpeg_restart.hpp).
+    // Restarts that split every MCU row (4:2:0: 16 px; gray 8) evenly into segments of 4 to 8
+    // MCUs (a whole row when none divides it): a window decodes from its own rows' and columns'
+    // segments alone (jpeg_restart.hpp).
+    const int mcus_per_row = image.channels() == 3 ? (image.cols + 15) / 16 : (image.cols + 7) / 8;
+    int interval = mcus_per_row;
+    for (int mcus = 8; mcus >= 4 && interval == mcus_per_row; --mcus) {
+      if (mcus < mcus_per_row && mcus_per_row % mcus == 0) interval = mcus;
+    }
     cv::imencode(".jpg", image, msg.data,
-                 {cv::IMWRITE_JPEG_QUALITY, jpeg_quality, cv::IMWRITE_JPEG_RST_INTERVAL,
-                  image.channels() == 3 ? (image.cols + 15) / 16 : (image.cols + 7) / 8});
+                 {cv::IMWRITE_JPEG_QUALITY, jpeg_quality, cv::IMWRITE_JPEG_RST_INTERVAL, interval});
   } else {
     msg.data.resize(static_cast<size_t>(msg.row_stride) * image.rows);
     for (int r = 0; r < image.rows; ++r) {

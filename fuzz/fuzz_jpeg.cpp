@@ -10,7 +10,8 @@
 // bottom too; each part also through the restart index (jpeg_restart.hpp) and through the stream
 // from its top: the same verdict and the same pixels, whatever the bytes. The pyramid's
 // reduced decode (decodeJpegReduced) by 2, 4, 8: the same refusals, the reduced size, the same
-// pixels when decoded twice; any other scale refused.
+// pixels when decoded twice; any other scale refused. A band's rows of it (decodeJpegReducedRows)
+// through the restart index and from the stream's top: the same verdict, the whole's pixels.
 #include <opencv2/core.hpp>
 
 #include <algorithm>
@@ -132,6 +133,29 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                                                     msg.height, scale, &again, &reduced_why) &&
                      cv::norm(reduced, again, cv::NORM_INF) == 0,
                  "two reduced decodes of the same bytes differ");
+      // A band's rows (the middle third, from a reduced row): through the restart index and
+      // through the stream from its top, the same verdict and pixels, those of the whole.
+      const int row0 = msg.height / 3 / scale * scale,
+                row1 = std::max(row0 + 1, 2 * msg.height / 3);
+      cv::Mat by_index, by_stream;
+      std::string index_why, stream_why;
+      const bool index_ok = ptz::perception::decodeJpegReducedRows(
+          ptz::perception::JpegRestartIndex(msg.data.data(), msg.data.size()), msg.width,
+          msg.height, scale, row0, row1, &by_index, &index_why);
+      const bool stream_ok = ptz::perception::decodeJpegReducedRows(
+          ptz::perception::JpegRestartIndex(msg.data.data(), msg.data.size(), false), msg.width,
+          msg.height, scale, row0, row1, &by_stream, &stream_why);
+      FUZZ_CHECK(index_ok == stream_ok, "reduced rows: the restart path says " +
+                                            std::string(index_ok ? "yes" : index_why) +
+                                            ", the stream " +
+                                            std::string(stream_ok ? "yes" : stream_why));
+      if (index_ok && stream_ok) {
+        const cv::Mat want = reduced.rowRange(row0 / scale, (row1 + scale - 1) / scale);
+        FUZZ_CHECK(by_index.size() == want.size() && by_stream.size() == want.size() &&
+                       cv::norm(by_index, want, cv::NORM_INF) == 0 &&
+                       cv::norm(by_stream, want, cv::NORM_INF) == 0,
+                   "reduced rows differ from the whole's");
+      }
     }
   }
   if (!image_ok) {

@@ -40,6 +40,8 @@ PTZ_PACKAGES=(
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev pcl-tools
   libgpiod-dev libgtest-dev libsystemd-dev libjpeg-dev
+  # a step of the wall clock under a real process (test/system/test_sim_processes.cpp)
+  libfaketime
   # the fuzz targets (fuzz/, scripts/fuzz): Debian 12's clang 14, libFuzzer and sanitizer runtimes
   clang-14 libfuzzer-14-dev libclang-rt-14-dev
   # GStreamer for ptz-camera's RTSP cameras (plugins-bad: openh264dec, their H.264 decoder)

@@ -102,7 +102,6 @@ class SimNode {
           [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) { onSetpoint(ch, m); },
           Delivery::kNewest);
     }
-    start_wall_utime_ = wallUtime();
     start_steady_ = std::chrono::steady_clock::now();
   }
 
@@ -136,8 +135,12 @@ class SimNode {
   }
 
  private:
+  // The wall-clock time of sim instant t_s. In real time: the wall clock now, less how long ago
+  // t_s was on the steady clock, so stamps follow the wall clock's steps and NTP's slewing (what
+  // every other process judges freshness by) instead of drifting from it over a long run.
   int64_t simUtime(double t_s) const {
-    return (lockstep_ ? kLockstepEpochUtime : start_wall_utime_) + std::llround(t_s * 1e6);
+    if (lockstep_) return kLockstepEpochUtime + std::llround(t_s * 1e6);
+    return wallUtime() + std::llround((t_s - realtimeNow()) * 1e6);
   }
   double realtimeNow() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_steady_).count();
@@ -223,15 +226,16 @@ class SimNode {
   void publishFrame() {
     SimFrame frame;
     ptzstereo::sim_truth_t truth;
-    {  // the instant of capture; the motors may move on while it renders
+    int64_t utime = 0;  // one stamp for the frame, its truth and its preview
+    {                   // the instant of capture; the motors may move on while it renders
       const std::lock_guard<std::mutex> lock(sim_mutex_);
       frame = sim_->snapshot();
-      truth = makeTruthMessage(*sim_, frame, simUtime(frame.t_s));
+      utime = simUtime(frame.t_s);
+      truth = makeTruthMessage(*sim_, frame, utime);
     }
     sim_->render(&frame);
     setVisibility(frame, &truth);
     current_frame_t_ = frame.t_s;
-    const int64_t utime = simUtime(frame.t_s);
     ptzstereo::stereo_frame_t msg =
         makeFrameMessage(frame, utime, encoding_, p_.getInt("jpeg_quality"));
     const int64_t now = wallUtime();
@@ -334,7 +338,6 @@ class SimNode {
   std::thread visca_thread_;
   std::atomic<bool> visca_quit_{false};
   std::atomic<int64_t> visca_packets_{0}, visca_malformed_{0}, visca_setpoints_applied_{0};
-  int64_t start_wall_utime_ = 0;
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;
   double current_frame_t_ = 0;

@@ -98,11 +98,21 @@ void declare(Params& p) {
         "TARGET_SELECT by image point: the largest distance from a track's image", Range::above(0));
   const WindowParams w;
   p.add("windows", w.enabled,
-        "with a confirmed track, scan windows around each track's predicted image (and the whole "
-        "frame every window_full_scan_every frames) instead of whole frames");
+        "with a confirmed track, scan windows around each track's predicted image (and a band of "
+        "the image a frame, or the whole frame every window_full_scan_every frames, for new "
+        "objects) instead of whole frames");
   p.add("window_full_scan_every", w.full_scan_every, "frames",
-        "windows: every n-th frame is scanned whole, for new objects (1: every frame)",
+        "windows: every n-th frame is scanned whole, for new objects (1: every frame); with "
+        "window_full_scan_in_bands, the image is scanned in this many bands, one a frame",
         Range::between(1, 1000));
+  p.add("window_full_scan_in_bands", w.full_scan_in_bands,
+        "windows: look for new objects in one band of the image's rows a frame instead of the "
+        "whole image every window_full_scan_every frames (no frame costs a whole scan)");
+  p.add("window_band_overlap_fraction", w.band_overlap_fraction, "",
+        "windows, bands: how far (a fraction of the image's height) each band reaches into its "
+        "neighbours: the tallest object sure to be whole in a band, and the largest vertical "
+        "disparity at which both images' band holds it",
+        Range::between(0, 1));
   p.add("window_margin_px", w.margin_px, "px",
         "windows: added on each side of a track's projected extent", Range::between(0, 4096));
   p.add("window_sigma_scale", w.sigma_scale, "",
@@ -153,6 +163,8 @@ WindowParams windowParams(const Params& p) {
   WindowParams w;
   w.enabled = p.getBool("windows");
   w.full_scan_every = p.getInt("window_full_scan_every");
+  w.full_scan_in_bands = p.getBool("window_full_scan_in_bands");
+  w.band_overlap_fraction = p.getDouble("window_band_overlap_fraction");
   w.margin_px = p.getDouble("window_margin_px");
   w.sigma_scale = p.getDouble("window_sigma_scale");
   w.full_scan_max_width_px = p.getInt("full_scan_max_width_px");
@@ -198,16 +210,27 @@ bool decodeParts(const ptzstereo::image_t& m, const std::vector<cv::Rect>& rects
   return true;
 }
 
-// The whole image (checked by checkStereoFrame, colour by checkFrameMatchesRig) reduced by `scale`
-// as BGR: a JPEG scaled in its decoder, raw pixels area-averaged from the message's own bytes.
-bool decodeReduced(const ptzstereo::image_t& m, int scale, cv::Mat* out, std::string* why) {
+// Rows [row0, row1) of an image (checked by checkStereoFrame, colour by checkFrameMatchesRig)
+// reduced by `scale` as BGR (DecodeReduced): a JPEG scaled in its decoder from those rows'
+// restart segments, raw pixels area-averaged from the message's own bytes.
+bool decodeReduced(const ptzstereo::image_t& m, int scale, int row0, int row1, cv::Mat* out,
+                   std::string* why) {
   if (m.encoding == ptzstereo::image_t::ENCODING_JPEG) {
-    if (!decodeJpegReduced(m.data.data(), m.data.size(), m.width, m.height, scale, out, why))
+    if (!decodeJpegReducedRows(JpegRestartIndex(m.data.data(), m.data.size()), m.width, m.height,
+                               scale, row0, row1, out, why)) {
       return false;
+    }
   } else {
+    if (row0 < 0 || row0 >= row1 || row1 > m.height || row0 % scale != 0) {
+      *why = "rows outside the image";
+      return false;
+    }
     const cv::Mat view(m.height, m.width, CV_8UC3, const_cast<uint8_t*>(m.data.data()),
                        static_cast<size_t>(m.row_stride));
-    cv::resize(view, *out, reducedSize({m.width, m.height}, scale), 0, 0, cv::INTER_AREA);
+    cv::resize(
+        view.rowRange(row0, row1), *out,
+        {reducedSize({m.width, m.height}, scale).width, (row1 + scale - 1) / scale - row0 / scale},
+        0, 0, cv::INTER_AREA);
   }
   if (m.pixel_format == ptzstereo::image_t::PIXEL_RGB8) cv::cvtColor(*out, *out, cv::COLOR_RGB2BGR);
   return true;
@@ -229,8 +252,8 @@ class FramePixels {
                 decoded_.emplace_back(r[i], (*out)[i]);
               return true;
             },
-            [this](int scale, cv::Mat* out, std::string* e) {
-              return decodeReduced(m_, scale, out, e);
+            [this](int scale, int row0, int row1, cv::Mat* out, std::string* e) {
+              return decodeReduced(m_, scale, row0, row1, out, e);
             }};
   }
 

@@ -82,6 +82,9 @@ bool JpegRestartIndex::index() {
   const int mcu_w = hmax * 8;
   mcu_h_ = vmax * 8;
   mcus_per_row_ = (width_ + mcu_w - 1) / mcu_w;
+  const bool tiles = interval_ < mcus_per_row_ && mcus_per_row_ % interval_ == 0;
+  tiles_per_row_ = tiles ? static_cast<int>(mcus_per_row_ / interval_) : 1;
+  tile_w_ = tiles ? static_cast<int>(interval_) * mcu_w : width_;
   mcu_rows_ = (height_ + mcu_h_ - 1) / mcu_h_;
   const int64_t mcus = int64_t{mcus_per_row_} * mcu_rows_;
   const int64_t segments = (mcus + interval_ - 1) / interval_;
@@ -129,6 +132,44 @@ int JpegRestartIndex::bandStart(int row) const {
   // Row r begins a segment when r * mcus_per_row is a multiple of the interval.
   const int64_t step = interval_ / std::gcd(int64_t{mcus_per_row_}, interval_);
   return static_cast<int>(row - row % step);
+}
+
+bool JpegRestartIndex::tile(int r0, int r1, int c0, int c1, std::vector<uint8_t>* out) const {
+  if (!usable() || r0 < 0 || r1 <= r0 || r1 > mcu_rows_ || c0 < 0 || c1 <= c0 ||
+      c1 > tiles_per_row_) {
+    return false;
+  }
+  if (tiles_per_row_ == 1) return band(r0, r1, out);
+  const int h = std::min(r1 * mcu_h_, height_) - r0 * mcu_h_;
+  const int w = std::min(c1 * tile_w_, width_) - c0 * tile_w_;
+  const auto segment = [&](int r, int c) {
+    return static_cast<size_t>(r) * static_cast<size_t>(tiles_per_row_) + static_cast<size_t>(c);
+  };
+  size_t bytes = header_end_ + 2;
+  for (int r = r0; r < r1; ++r) {
+    for (int c = c0; c < c1; ++c) bytes += seg_end_[segment(r, c)] - seg_begin_[segment(r, c)] + 2;
+  }
+  out->clear();
+  out->reserve(bytes);
+  out->insert(out->end(), data_, data_ + header_end_);
+  (*out)[height_offset_] = static_cast<uint8_t>(h >> 8);
+  (*out)[height_offset_ + 1] = static_cast<uint8_t>(h & 0xFF);
+  (*out)[height_offset_ + 2] = static_cast<uint8_t>(w >> 8);
+  (*out)[height_offset_ + 3] = static_cast<uint8_t>(w & 0xFF);
+  size_t n = 0;  // segments written: renumbered from RST0
+  for (int r = r0; r < r1; ++r) {
+    for (int c = c0; c < c1; ++c) {
+      if (n > 0) {
+        out->push_back(0xFF);
+        out->push_back(static_cast<uint8_t>(0xD0 + ((n - 1) & 7)));
+      }
+      out->insert(out->end(), data_ + seg_begin_[segment(r, c)], data_ + seg_end_[segment(r, c)]);
+      ++n;
+    }
+  }
+  out->push_back(0xFF);
+  out->push_back(0xD9);
+  return true;
 }
 
 bool JpegRestartIndex::band(int r0, int r1, std::vector<uint8_t>* out) const {

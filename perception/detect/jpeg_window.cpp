@@ -41,15 +41,16 @@ bool checkHeader(const uint8_t* data, size_t size, int width, int height, std::s
 }
 
 // The parts rects[i], i in `which` (image coordinates), from a JPEG of width x height pixels
-// whose first row is image row y0 (the whole image, or a band of MCU rows): (*parts)[i], already
-// allocated. *rows: about how many of the stream's rows went through the entropy decoder.
-bool decodeStream(const uint8_t* data, size_t size, int y0, int width, int height,
+// whose top-left pixel is the image's `origin` (the whole image, or a band of MCU rows and tiles):
+// (*parts)[i], already allocated. *rows: about how many of the stream's rows went through the
+// entropy decoder.
+bool decodeStream(const uint8_t* data, size_t size, cv::Point origin, int width, int height,
                   const std::vector<cv::Rect>& rects, const std::vector<size_t>& which,
                   std::vector<cv::Mat>* parts, std::string* why, int* rows) {
   // Everything libjpeg allocates is in its pools (freed by destroy); the vectors are declared
   // before setjmp, so a longjmp skips no destructor of a live object.
-  std::vector<cv::Rect> local;  // in the stream's rows
-  for (size_t i : which) local.push_back(rects[i] - cv::Point(0, y0));
+  std::vector<cv::Rect> local;  // in the stream's pixels
+  for (size_t i : which) local.push_back(rects[i] - origin);
   cv::Rect all;
   for (const auto& r : local) all = all.empty() ? r : (all | r);
   std::vector<uint8_t> row;
@@ -67,7 +68,8 @@ bool decodeStream(const uint8_t* data, size_t size, int y0, int width, int heigh
   jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
   if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK ||
       info.image_width != static_cast<JDIMENSION>(width) ||
-      info.image_height != static_cast<JDIMENSION>(height) || all.y < 0 || all.br().y > height) {
+      info.image_height != static_cast<JDIMENSION>(height) || all.y < 0 || all.br().y > height ||
+      all.x < 0 || all.br().x > width) {
     jpeg_destroy_decompress(&info);
     *why = "JPEG header incomplete";
     return false;
@@ -126,54 +128,68 @@ bool decodeStream(const uint8_t* data, size_t size, int y0, int width, int heigh
   return true;
 }
 
-// The parts from restart segments: a band of MCU rows per group of parts whose rows (with one MCU
-// row of context above and below: fancy upsampling reads the chroma rows around) overlap or
-// touch; a band at the top is the stream itself. False when any band fails (the caller then
-// decodes the stream from its top, whose verdict stands).
+// The parts from restart segments: a band of MCU rows (and of tiles, when segments split the
+// rows) per group of parts whose cells overlap or touch, each part's cell holding one MCU row of
+// context above and below and one tile each side (fancy upsampling reads the chroma around); a
+// band at the top of untiled rows is the stream itself. False when any band fails (the caller
+// then decodes the stream from its top, whose verdict stands).
 bool decodeBands(const JpegRestartIndex& jpeg, const std::vector<cv::Rect>& rects,
                  std::vector<cv::Mat>* parts, JpegWindowStats* stats) {
   struct Band {
-    int r0, r1;
+    int r0, r1, c0, c1;  // MCU rows, tiles
     std::vector<size_t> which;
   };
-  const int mh = jpeg.mcuHeight(), height = jpeg.height();
-  std::vector<size_t> order(rects.size());
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::sort(order.begin(), order.end(),
-            [&](size_t a, size_t b) { return rects[a].y < rects[b].y; });
+  const int mh = jpeg.mcuHeight(), height = jpeg.height(), tw = jpeg.tileWidth();
+  const int tiles = jpeg.tilesPerRow();
   std::vector<Band> bands;
-  for (size_t i : order) {
-    const int lo = jpeg.bandStart(std::max(0, rects[i].y / mh - 1));
-    const int hi = std::min(jpeg.mcuRows(), (rects[i].br().y + mh - 1) / mh + 1);
-    // Apart, a second band costs its header and set-up; a gap of rows between costs their
-    // entropy decoding: only bands that touch are joined (two 1080p windows a row apart: 0.30 ms
-    // as two bands, 0.52 ms as one).
-    if (!bands.empty() && lo <= bands.back().r1) {
-      bands.back().r1 = std::max(bands.back().r1, hi);
-      bands.back().which.push_back(i);
-    } else {
-      bands.push_back({lo, hi, {i}});
+  for (size_t i = 0; i < rects.size(); ++i) {
+    const cv::Rect& r = rects[i];
+    bands.push_back({jpeg.bandStart(std::max(0, r.y / mh - 1)),
+                     std::min(jpeg.mcuRows(), (r.br().y + mh - 1) / mh + 1),
+                     std::max(0, r.x / tw - 1),
+                     std::min(tiles, (r.br().x + tw - 1) / tw + 1),
+                     {i}});
+  }
+  // Apart, a second band costs its header and set-up; a gap between costs its entropy decoding:
+  // only bands that touch are joined (two 1080p windows a row apart: 0.30 ms as two bands, 0.52
+  // ms as one).
+  for (bool joined = true; joined;) {
+    joined = false;
+    for (size_t a = 0; a < bands.size() && !joined; ++a) {
+      for (size_t b = a + 1; b < bands.size(); ++b) {
+        Band& x = bands[a];
+        const Band& y = bands[b];
+        if (y.r0 > x.r1 || x.r0 > y.r1 || y.c0 > x.c1 || x.c0 > y.c1) continue;
+        x = {std::min(x.r0, y.r0), std::max(x.r1, y.r1), std::min(x.c0, y.c0), std::max(x.c1, y.c1),
+             x.which};
+        x.which.insert(x.which.end(), y.which.begin(), y.which.end());
+        bands.erase(bands.begin() + static_cast<ptrdiff_t>(b));
+        joined = true;
+        break;
+      }
     }
   }
   std::vector<uint8_t> bytes;
   std::string why;
   for (const Band& b : bands) {
     int rows = 0;
-    if (b.r0 == 0) {
-      if (!decodeStream(jpeg.data(), jpeg.size(), 0, jpeg.width(), height, rects, b.which, parts,
-                        &why, &rows)) {
+    const int y0 = b.r0 * mh, x0 = b.c0 * tw;
+    const int w = std::min(b.c1 * tw, jpeg.width()) - x0;
+    if (b.r0 == 0 && tiles == 1) {
+      if (!decodeStream(jpeg.data(), jpeg.size(), {0, 0}, jpeg.width(), height, rects, b.which,
+                        parts, &why, &rows)) {
         return false;
       }
     } else {
-      const int y0 = b.r0 * mh;
-      if (!jpeg.band(b.r0, b.r1, &bytes) ||
-          !decodeStream(bytes.data(), bytes.size(), y0, jpeg.width(),
-                        std::min(b.r1 * mh, height) - y0, rects, b.which, parts, &why, &rows)) {
+      if (!jpeg.tile(b.r0, b.r1, b.c0, b.c1, &bytes) ||
+          !decodeStream(bytes.data(), bytes.size(), {x0, y0}, w, std::min(b.r1 * mh, height) - y0,
+                        rects, b.which, parts, &why, &rows)) {
         return false;
       }
       ++stats->restart_bands;
     }
     stats->decoded_rows += rows;
+    stats->decoded_width = std::max(stats->decoded_width, w);
   }
   return true;
 }
@@ -217,23 +233,23 @@ bool decodeJpegWindows(const JpegRestartIndex& jpeg, int width, int height,
   cost = {};
   std::vector<size_t> which(rects.size());
   std::iota(which.begin(), which.end(), size_t{0});
-  if (!decodeStream(jpeg.data(), jpeg.size(), 0, width, height, rects, which, &parts, why,
+  if (!decodeStream(jpeg.data(), jpeg.size(), {0, 0}, width, height, rects, which, &parts, why,
                     &cost.decoded_rows)) {
     return false;
   }
+  cost.decoded_width = width;
   *outs = parts;
   if (stats != nullptr) *stats = cost;
   return true;
 }
 
-bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, int scale,
-                       cv::Mat* out, std::string* why) {
-  if (scale != 2 && scale != 4 && scale != 8) {
-    *why = "scale " + std::to_string(scale) + " is none of 2, 4, 8";
-    return false;
-  }
-  if (!checkHeader(data, size, width, height, why)) return false;
-  // As in decodeJpegWindows: the image is declared before setjmp, libjpeg's memory is its pools.
+namespace {
+
+// The first `rows` rows of a JPEG of width x height reduced by `scale` in the decoder (header
+// checked by the caller); the rest of the stream is not decoded.
+bool decodeReducedStream(const uint8_t* data, size_t size, int width, int height, int scale,
+                         int rows, cv::Mat* out, std::string* why) {
+  // As in decodeStream: the image is declared before setjmp, libjpeg's memory is its pools.
   cv::Mat image((height + scale - 1) / scale, (width + scale - 1) / scale, CV_8UC3);
   jpeg_decompress_struct info{};
   JpegError err{};
@@ -247,7 +263,9 @@ bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, 
   }
   jpeg_create_decompress(&info);
   jpeg_mem_src(&info, data, static_cast<unsigned long>(size));
-  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK) {
+  if (jpeg_read_header(&info, TRUE) != JPEG_HEADER_OK ||
+      info.image_width != static_cast<JDIMENSION>(width) ||
+      info.image_height != static_cast<JDIMENSION>(height)) {
     jpeg_destroy_decompress(&info);
     *why = "JPEG header incomplete";
     return false;
@@ -266,7 +284,8 @@ bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, 
            std::to_string(image.rows);
     return false;
   }
-  while (info.output_scanline < info.output_height) {
+  const JDIMENSION last = static_cast<JDIMENSION>(std::min(rows, image.rows));
+  while (info.output_scanline < last) {
     JSAMPROW p = image.ptr(static_cast<int>(info.output_scanline));
     if (jpeg_read_scanlines(&info, &p, 1) != 1) {
       jpeg_destroy_decompress(&info);
@@ -274,8 +293,66 @@ bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, 
       return false;
     }
   }
-  jpeg_destroy_decompress(&info);  // every row read; nothing after them is needed
-  *out = image;
+  jpeg_destroy_decompress(&info);  // abort, not finish: nothing after these rows is needed
+  *out = image.rowRange(0, static_cast<int>(last));
+  return true;
+}
+
+bool validScale(int scale, std::string* why) {
+  if (scale == 2 || scale == 4 || scale == 8) return true;
+  *why = "scale " + std::to_string(scale) + " is none of 2, 4, 8";
+  return false;
+}
+
+}  // namespace
+
+bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, int scale,
+                       cv::Mat* out, std::string* why) {
+  if (!validScale(scale, why) || !checkHeader(data, size, width, height, why)) return false;
+  return decodeReducedStream(data, size, width, height, scale, (height + scale - 1) / scale, out,
+                             why);
+}
+
+bool decodeJpegReducedRows(const JpegRestartIndex& jpeg, int width, int height, int scale, int row0,
+                           int row1, cv::Mat* out, std::string* why, JpegWindowStats* stats) {
+  if (!validScale(scale, why)) return false;
+  if (row0 < 0 || row0 >= row1 || row1 > height || row0 % scale != 0) {
+    *why = "rows " + std::to_string(row0) + ".." + std::to_string(row1) + " not in the image";
+    return false;
+  }
+  const int out0 = row0 / scale, out1 = (row1 + scale - 1) / scale;
+  const int mh = jpeg.mcuHeight();
+  JpegWindowStats cost;
+  cv::Mat image;
+  // A band of the MCU rows with one of context above and below (as decodeBands): the pixels of
+  // the whole decode's rows (the tests compare them).
+  if (jpeg.usable() && jpeg.width() == width && jpeg.height() == height && mh % scale == 0) {
+    const int r0 = jpeg.bandStart(std::max(0, row0 / mh - 1));
+    const int r1 = std::min(jpeg.mcuRows(), (row1 + mh - 1) / mh + 1);
+    const int top = r0 * mh / scale;  // the band's first row in the reduced image
+    std::vector<uint8_t> bytes;
+    std::string ignored;  // a failing band: the stream from its top decides
+    const bool ok = r0 == 0 ? decodeReducedStream(jpeg.data(), jpeg.size(), width, height, scale,
+                                                  out1, &image, &ignored)
+                            : jpeg.band(r0, r1, &bytes) &&
+                                  decodeReducedStream(bytes.data(), bytes.size(), width,
+                                                      std::min(r1 * mh, height) - r0 * mh, scale,
+                                                      out1 - top, &image, &ignored);
+    if (ok && image.rows == out1 - top) {
+      cost.restart_bands = r0 == 0 ? 0 : 1;
+      cost.decoded_rows = std::min(r1 * mh, height) - r0 * mh;
+      *out = image.rowRange(out0 - top, out1 - top);
+      if (stats != nullptr) *stats = cost;
+      return true;
+    }
+  }
+  if (!checkHeader(jpeg.data(), jpeg.size(), width, height, why) ||
+      !decodeReducedStream(jpeg.data(), jpeg.size(), width, height, scale, out1, &image, why)) {
+    return false;
+  }
+  cost.decoded_rows = std::min(height, out1 * scale);
+  *out = image.rowRange(out0, out1);
+  if (stats != nullptr) *stats = cost;
   return true;
 }
 

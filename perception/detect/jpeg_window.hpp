@@ -32,6 +32,7 @@ bool decodeJpegWindows(const uint8_t* data, size_t size, int width, int height,
 struct JpegWindowStats {
   int restart_bands = 0;  // bands decoded from restart segments (0: the stream from its top)
   int decoded_rows = 0;   // image rows whose MCUs went through the entropy decoder (about)
+  int decoded_width = 0;  // of those rows' columns, the widest band's (px)
 };
 // decodeJpegWindows with the image's restart index built once (`jpeg`: its bytes, JpegRestartIndex
 // of them) for the several decodes of one image in a frame. An unusable index takes the path
@@ -45,5 +46,12 @@ bool decodeJpegWindows(const JpegRestartIndex& jpeg, int width, int height,
 // The same checks; *out untouched when false.
 bool decodeJpegReduced(const uint8_t* data, size_t size, int width, int height, int scale,
                        cv::Mat* out, std::string* why);
+// Rows [row0, row1) of the whole image (row0 a multiple of scale) reduced by `scale`: the reduced
+// image's rows row0 / scale up to (row1 + scale - 1) / scale, the same pixels as decodeJpegReduced
+// gives there, decoded (with restart markers) from the segments of those rows alone. A banded full
+// scan's band (windows.hpp). The same checks; *out untouched when false.
+bool decodeJpegReducedRows(const JpegRestartIndex& jpeg, int width, int height, int scale, int row0,
+                           int row1, cv::Mat* out, std::string* why,
+                           JpegWindowStats* stats = nullptr);
 
 }  // namespace ptz::perception

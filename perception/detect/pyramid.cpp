@@ -40,7 +40,7 @@ bool WindowScanner::pyramidSide(const Detector& detector, int scale, const Image
   const cv::Size small = reducedSize(size_, scale);
   cv::Mat reduced;
   if (pixels.reduced) {
-    if (!pixels.reduced(scale, &reduced, why)) return false;
+    if (!pixels.reduced(scale, 0, size_.height, &reduced, why)) return false;
   } else {
     std::vector<cv::Mat> image;
     if (!pixels.parts({cv::Rect({0, 0}, size_)}, &image, why)) return false;

@@ -1,6 +1,7 @@
 #include "perception/detect/windows.hpp"
 
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -89,7 +90,7 @@ WindowScanner::WindowScanner(WindowParams params, cv::Size image_size, int exact
         "windows_cut_to_full_scan", "windows_unbounded", "full_scans_disabled",
         "full_scans_no_tracks", "full_scans_periodic", "full_scans_behind", "full_scans_cover",
         "full_scans_cut", "frames_scanned_pyramid", "pyramid_fallbacks_cut",
-        "pyramid_fallbacks_cover", "pyramid_windows_grown"}) {
+        "pyramid_fallbacks_cover", "pyramid_windows_grown", "bands_scanned"}) {
     counts_[k] = 0;
   }
 }
@@ -132,11 +133,13 @@ ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const
   }
   if (!any) {
     plan.reason = "no_tracks";
-  } else if (since_full_ + 1 >= p_.full_scan_every) {
+  } else if (!bands() && since_full_ + 1 >= p_.full_scan_every) {
     plan.reason = "periodic";
   } else {
     plan.left = mergeRects(lw);
     plan.right = mergeRects(rw);
+    if (bands())
+      plan.band = bandRows(next_band_, pyramidScale(size_.width, p_.full_scan_max_width_px));
     plan.reason = refuse(plan.left);
     if (plan.reason.empty()) plan.reason = refuse(plan.right);
     plan.full = !plan.reason.empty();
@@ -182,6 +185,68 @@ bool WindowScanner::detectSide(const Detector& detector, const std::vector<cv::R
   return true;
 }
 
+cv::Rect WindowScanner::bandRows(int k, int scale) const {
+  const int64_t n = p_.full_scan_every, h = size_.height;
+  const int overlap = static_cast<int>(std::ceil(p_.band_overlap_fraction * size_.height));
+  int y0 = std::max(0, static_cast<int>(k * h / n) - overlap);
+  y0 -= y0 % scale;  // a reduced row starts there
+  const int y1 = std::min(size_.height, static_cast<int>((k + 1) * h / n) + overlap);
+  return cv::Rect(0, y0, size_.width, y1 - y0);
+}
+
+bool WindowScanner::bandWindows(const Detector& detector, int scale, const cv::Rect& band,
+                                const ImagePixels& pixels, const std::vector<cv::Rect>& tracked,
+                                std::vector<cv::Rect>* windows, std::string* why) const {
+  const cv::Size small(reducedSize(size_, scale).width,
+                       (band.br().y + scale - 1) / scale - band.y / scale);
+  cv::Mat pixels_of_band;
+  if (scale > 1 && pixels.reduced) {
+    if (!pixels.reduced(scale, band.y, band.br().y, &pixels_of_band, why)) return false;
+  } else {
+    std::vector<cv::Mat> parts;
+    if (!pixels.parts({band}, &parts, why)) return false;
+    if (parts.size() != 1 || parts[0].size() != band.size() || parts[0].type() != CV_8UC3) {
+      *why = "the band's pixels are not the band's size or BGR";
+      return false;
+    }
+    pixels_of_band = parts[0];
+    if (scale > 1) cv::resize(parts[0], pixels_of_band, small, 0, 0, cv::INTER_AREA);
+  }
+  if (pixels_of_band.size() != small || pixels_of_band.type() != CV_8UC3) {
+    *why = "the reduced band is not the reduced size or BGR";
+    return false;
+  }
+  // Candidates as a pyramid level's (scale 1: the area limits widened, no shape test): the exact
+  // regions come from the windows around them, so a band's cut edge or a candidate's shape there
+  // decides nothing.
+  std::vector<Region> candidates = detector.detectReduced(pixels_of_band, scale);
+  const int reduced_height = reducedSize(size_, scale).height;
+  std::vector<Region> untracked;
+  for (Region c : candidates) {
+    // In a track's window already: that window's scan finds it exactly (or, cut, grows).
+    c.bbox.y += band.y / scale;
+    const cv::Rect full(c.bbox.x * scale, c.bbox.y * scale, c.bbox.width * scale,
+                        c.bbox.height * scale);
+    if (std::any_of(tracked.begin(), tracked.end(),
+                    [&](const cv::Rect& w) { return !(w & full).empty(); })) {
+      continue;
+    }
+    c.bbox.y -= band.y / scale;
+    // One that may go on across the band's edge (the filters reach margin_px_ from it): its
+    // window runs to the image's edge that way, so it need not be cut and grown for it.
+    const bool up = band.y > 0 && c.bbox.y <= margin_px_;
+    const bool down =
+        band.br().y < size_.height && c.bbox.br().y >= pixels_of_band.rows - margin_px_;
+    const int y0 = up ? 0 : c.bbox.y + band.y / scale;
+    const int y1 = down ? reduced_height : c.bbox.br().y + band.y / scale;
+    c.bbox.y = y0;
+    c.bbox.height = y1 - y0;
+    untracked.push_back(c);
+  }
+  *windows = pyramidWindows(untracked, scale, pyramidMarginPx(scale, margin_px_), size_);
+  return true;
+}
+
 std::vector<cv::Rect> WindowScanner::grow(const std::vector<cv::Rect>& windows) const {
   std::vector<cv::Rect> grown;
   for (const auto& w : windows) {
@@ -224,6 +289,22 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
     *why = ok[0] ? "right image: " + errors[1] : "left image: " + errors[0];
     return true;
   };
+  if (!plan->full && !plan->band.empty()) {
+    const int scale = pyramidScale(size_.width, p_.full_scan_max_width_px);
+    std::vector<cv::Rect> found[2];
+    both([&](int i) {
+      ok[i] =
+          bandWindows(detector, scale, plan->band, *pixels[i], *windows[i], &found[i], &errors[i]);
+    });
+    if (failed()) return false;
+    for (int i = 0; i < 2; ++i) {
+      windows[i]->insert(windows[i]->end(), found[i].begin(), found[i].end());
+      *windows[i] = mergeRects(*windows[i]);
+    }
+    plan->reason = refuse(plan->left);
+    if (plan->reason.empty()) plan->reason = refuse(plan->right);
+    plan->full = !plan->reason.empty();
+  }
   if (!plan->full) {
     both([&](int i) {
       ok[i] = detectSide(detector, *windows[i], *decode[i], out[i], &cut[i], &errors[i]);
@@ -247,9 +328,12 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
       }
     }
   }
+  // A band scanned, or covered by the full scan its frame fell back to: the next one's turn.
+  if (!plan->band.empty()) next_band_ = (next_band_ + 1) % p_.full_scan_every;
   if (plan->full) {
     plan->left.clear();
     plan->right.clear();
+    plan->band = {};
     const int scale = pyramidScale(size_.width, p_.full_scan_max_width_px);
     std::string fallback[2];
     int grown[2] = {0, 0};
@@ -277,7 +361,8 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
   } else {
     ++counts_["frames_scanned_windowed"];
     counts_["windows_unbounded"] += plan->unbounded;
-    ++since_full_;
+    since_full_ = std::min(since_full_ + 1, p_.full_scan_every);
+    if (!plan->band.empty()) ++counts_["bands_scanned"];
   }
   return true;
 }

@@ -1,6 +1,8 @@
 // Windows for speed (no LCM): with confirmed tracks, detection runs on a window around each
-// track's predicted image in each camera instead of the whole frame, and scans the whole frame
-// every few frames (and whenever a window could miss its object) for new objects. A window's
+// track's predicted image in each camera instead of the whole frame, and looks for new objects in
+// one band of the image's rows a frame (so the whole image every few frames, at a fifth of the
+// cost a frame: no frame pays a whole scan), or scans the whole frame every few frames; and
+// whenever a window could miss its object. A window's
 // regions are those of a full scan: the detector works on a crop with enough margin for its
 // filters, and keeps only regions strictly inside the window. A window across the image's border
 // is cut to the image (the image's edge is exact). A full scan of a wide image finds its objects on
@@ -24,7 +26,15 @@ namespace ptz::perception {
 
 struct WindowParams {
   bool enabled = true;
-  int full_scan_every = 5;          // frames: every n-th frame is scanned whole (1: always)
+  int full_scan_every = 5;  // frames: every n-th frame is scanned whole (1: always), or n bands
+  // The image scanned for new objects a band of rows a frame (n = full_scan_every bands, band k of
+  // frame k mod n) instead of whole every n-th frame. A band finds its objects as a full scan does
+  // (candidates, on the reduced image for a wide one, then exact windows around them), so no frame
+  // costs a whole scan. Each band reaches band_overlap_fraction of the image's height into its
+  // neighbours: an object that short is whole in one band, and an object whose rows differ that
+  // little between the two images (vertical disparity) is in the same frame's band in both.
+  bool full_scan_in_bands = true;
+  double band_overlap_fraction = 0.05;
   double margin_px = 16;            // added around each track's projected extent
   double sigma_scale = 3;           // k: the track's radius plus k sigma of its position covariance
   double max_cover_fraction = 0.5;  // windows covering more of an image than this: full scan
@@ -57,6 +67,9 @@ struct ScanPlan {
   bool full = true;
   std::string reason;    // why full: disabled, no_tracks, periodic, behind, cover, cut
   bool pyramid = false;  // a full scan done in both images through the reduced image
+  // Windowed with bands: the band scanned for new objects in both images (full-image rows, the
+  // whole width); empty: none.
+  cv::Rect band;
   std::vector<cv::Rect> left, right;
   int unbounded = 0;  // coasting tracks whose window is unbounded, left to the periodic scan
 };
@@ -65,10 +78,12 @@ struct ScanPlan {
 // (*parts)[i] those of rects[i].
 using DecodeParts = std::function<bool(const std::vector<cv::Rect>& rects,
                                        std::vector<cv::Mat>* parts, std::string* why)>;
-// A camera's whole image reduced by `scale` (2, 4 or 8) to reducedSize(), as 8-bit BGR.
-using DecodeReduced = std::function<bool(int scale, cv::Mat* reduced, std::string* why)>;
-// A camera's pixels: parts at full resolution, and the whole image reduced (when empty: the whole
-// image from `parts`, reduced by cv::resize INTER_AREA). Implicit: parts alone will do.
+// A camera's image rows [row0, row1) (row0 a multiple of scale) reduced by `scale` (2, 4 or 8):
+// rows row0 / scale .. ceil(row1 / scale) of the whole image reduced to reducedSize(), 8-bit BGR.
+using DecodeReduced =
+    std::function<bool(int scale, int row0, int row1, cv::Mat* reduced, std::string* why)>;
+// A camera's pixels: parts at full resolution, and rows reduced (when empty: the rows from
+// `parts`, reduced by cv::resize INTER_AREA). Implicit: parts alone will do.
 struct ImagePixels {
   ImagePixels(DecodeParts parts_at_full, DecodeReduced reduced_whole = {})
       : parts(std::move(parts_at_full)), reduced(std::move(reduced_whole)) {}
@@ -82,12 +97,13 @@ class WindowScanner {
   WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px);
 
   // The plan of the next frame at t_s from the tracks (predicted to t_s) and the frame's views;
-  // advances the periodic count.
+  // advances the periodic count (or the band).
   ScanPlan plan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
                 const CameraView& right);
 
   // Detects in one frame as planned, both sides on two cores: the whole images, or the windows
-  // (a window whose region crosses its edge grows once; still crossing, or grown beyond the
+  // (with a band: and windows around the band's candidates; a window whose region crosses its
+  // edge grows once; still crossing, or grown beyond the
   // image or the cover limit: the frame is scanned whole). A full scan of an image wider than
   // full_scan_max_width_px goes through the pyramid (the same regions; pyramid.hpp). False when
   // a decode fails (*why).
@@ -95,7 +111,8 @@ class WindowScanner {
               const ImagePixels& right, std::vector<Region>* left_regions,
               std::vector<Region>* right_regions, std::string* why);
 
-  // frames_scanned_full, frames_scanned_windowed, full_scans_<reason>, windows_grown,
+  // frames_scanned_full, frames_scanned_windowed (bands_scanned of them with a band),
+  // full_scans_<reason>, windows_grown,
   // windows_cut_to_full_scan, windows_unbounded (coasting tracks left to the periodic scan in
   // windowed frames); of the full scans frames_scanned_pyramid, pyramid_fallbacks_<reason> (cut,
   // cover: an image then scanned at full resolution), pyramid_windows_grown; since the start.
@@ -103,6 +120,7 @@ class WindowScanner {
   const WindowParams& params() const { return p_; }
 
  private:
+  bool bands() const { return p_.full_scan_in_bands && p_.full_scan_every > 1; }
   // Why windows cannot be used as they are ("" when they can): cover.
   std::string refuse(const std::vector<cv::Rect>& windows) const;
   // Regions of every window of one side; *cut when one crosses its window's edge.
@@ -111,6 +129,14 @@ class WindowScanner {
                   std::string* why) const;
   // Windows grown by grow_factor about their centres, cut to the image, merged.
   std::vector<cv::Rect> grow(const std::vector<cv::Rect>& windows) const;
+  // Windows (full-image px) around the candidates in the rows `band` of one side but those
+  // touching a track's window (`tracked`): found on the band reduced by `scale` (1: at full
+  // resolution) as a pyramid's level, each candidate's box scaled back with the pyramid's margin.
+  bool bandWindows(const Detector& detector, int scale, const cv::Rect& band,
+                   const ImagePixels& pixels, const std::vector<cv::Rect>& tracked,
+                   std::vector<cv::Rect>* windows, std::string* why) const;
+  // Band k of full_scan_every (full-image rows, whole width, its overlap included).
+  cv::Rect bandRows(int k, int scale) const;
   // The whole image at full resolution.
   bool fullSide(const Detector& detector, const DecodeParts& decode, std::vector<Region>* regions,
                 std::string* why) const;
@@ -125,6 +151,7 @@ class WindowScanner {
   cv::Size size_;
   int margin_px_;
   int since_full_ = 0;  // windowed frames since the last full scan
+  int next_band_ = 0;   // the band the next windowed frame scans
   std::map<std::string, int64_t> counts_;
 };
 

@@ -45,6 +45,19 @@ inline void writeBytes(const std::string& path, const std::vector<uint8_t>& byte
 
 }  // namespace detail
 
+// The period of the path of sim_config_yaml's object "ball" (s): a recording of that many seconds
+// loops without a jump. Throws std::runtime_error when there is no ball.
+inline double simBallPeriodS(const std::string& sim_config_yaml) {
+  cv::FileStorage fs(sim_config_yaml, cv::FileStorage::READ);
+  if (!fs.isOpened()) throw std::runtime_error("simBallPeriodS: cannot read " + sim_config_yaml);
+  const sim::Scene scene = sim::Scene::fromConfig(fs["scene"], fs["objects"], fs["chessboard"],
+                                                  "config file '" + sim_config_yaml + "'");
+  for (const auto& o : scene.objects) {
+    if (o.name == "ball") return o.trajectory.period_s;
+  }
+  throw std::runtime_error("simBallPeriodS: no object 'ball' in " + sim_config_yaml);
+}
+
 // Renders `frames` stereo frames of sim_config_yaml's scene (its scene, objects, chessboard and
 // noise_sigma) at image_size ("vga", "720p", "1080p" or WxH) into dir (created if missing).
 // Throws std::runtime_error (or ConfigError for the config) on failure.

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 
 #include "common/plant.hpp"
@@ -12,6 +14,7 @@
 #include "ptzstereo/sim_truth_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "support/child_process.hpp"
+#include "support/data_dir.hpp"
 #include "support/lcm_wait.hpp"
 
 using namespace std::chrono_literals;
@@ -225,4 +228,66 @@ TEST(SimProcess, NoSetpointMovesAnAxisBeyondItsLimits) {
   EXPECT_EQ(run->counters["setpoint_values_clamped"], 15 * 4 + 15 * 3);
   EXPECT_EQ(run->counters["setpoint_values_rejected"], 15 * 3);
   EXPECT_EQ(run->counters["setpoints_applied"], 60);
+}
+
+// The wall clock steps an hour ahead (NTP on a host that was off) while ptz-sim runs in real time,
+// under libfaketime (its steady clock untouched): frames and states stay stamped on the wall
+// clock every other process judges freshness by, captured just before they are published,
+// instead of an hour behind it (their start time plus the steady clock's count).
+TEST(SimProcess, StampsFollowAStepOfTheWallClock) {
+  const std::string lib = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
+  if (!ptz::test::exists(lib)) {
+    if (ptz::test::skipAllowed()) GTEST_SKIP() << lib << " absent (Debian's libfaketime)";
+    FAIL() << lib << " absent in CI (scripts/install-deps installs libfaketime)";
+  }
+  char dir[] = "/tmp/ptz_faketime_XXXXXX";
+  ASSERT_NE(mkdtemp(dir), nullptr);
+  const std::string offset_file = std::string(dir) + "/offset";
+  const auto setOffset = [&](const std::string& offset) {
+    std::ofstream(offset_file) << offset << "\n";
+  };
+  setOffset("+0");
+  struct Stamps {
+    std::vector<std::pair<int64_t, int64_t>> frames, states;  // utime, publish_utime
+    void onFrame(const lcm::ReceiveBuffer*, const std::string&,
+                 const ptzstereo::stereo_frame_t* m) {
+      frames.emplace_back(m->utime, m->publish_utime);
+    }
+    void onState(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::ptz_state_t* m) {
+      states.emplace_back(m->utime, m->publish_utime);
+    }
+  } stamps;
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ASSERT_TRUE(lcm.good());
+  lcm.subscribe("STEREO_FRAME", &Stamps::onFrame, &stamps);
+  lcm.subscribe("PTZ_STATE", &Stamps::onState, &stamps);
+  ChildProcess sim({"/usr/bin/env", "LD_PRELOAD=" + lib, "FAKETIME_TIMESTAMP_FILE=" + offset_file,
+                    "FAKETIME_NO_CACHE=1", "FAKETIME_DONT_FAKE_MONOTONIC=1", PTZ_SIM_BIN,
+                    "--lcm-url", ptz::test::kTestUrl, "--frames", "120", "--encoding", "jpeg",
+                    "--clock", "realtime"});
+  ASSERT_TRUE(sim.started());
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return stamps.frames.size() >= 30; }, 20s));
+  const size_t before = stamps.frames.size(), states_before = stamps.states.size();
+  setOffset("+3600");
+  ptz::test::handleUntil(
+      lcm, [&] { return sim.wait(0ms) >= 0; }, 30s);
+  ptz::test::drain(lcm, 300ms);
+  std::filesystem::remove_all(dir);
+  EXPECT_EQ(sim.wait(0ms), 0);
+  ASSERT_GE(stamps.frames.size(), before + 30) << "too few frames after the step";
+  // Each frame's capture a render's time before its publish (both on the process's wall clock):
+  // under a second, an hour on either side of the step.
+  for (const auto& [utime, publish_utime] : stamps.frames) {
+    EXPECT_GE(publish_utime - utime, 0);
+    EXPECT_LT(publish_utime - utime, 1'000'000);
+  }
+  for (const auto& [utime, publish_utime] : stamps.states) {
+    EXPECT_LT(std::abs(publish_utime - utime), 1'000'000);
+  }
+  EXPECT_GT(stamps.states.size(), states_before);
+  // And the step shows in the stamps: an hour and the frames' few seconds from first to last.
+  const int64_t span_us = stamps.frames.back().first - stamps.frames.front().first;
+  EXPECT_GT(span_us, 3600'000'000LL);
+  EXPECT_LT(span_us, 3600'000'000LL + 30'000'000LL);
 }

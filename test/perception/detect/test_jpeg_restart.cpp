@@ -142,24 +142,29 @@ int expectExact(const Bytes& jpeg, const cv::Mat& whole, const std::vector<cv::R
 
 // ptz-sim and ptz-camera's JPEGs: OpenCV 4.6 writes 4:2:0 (MCUs of 16x16 in colour) and
 // encodeImage a restart interval of one MCU row; the index takes them.
-TEST(JpegRestart, EncodeImageWritesARestartAtEveryMcuRow) {
+// encodeImage's restarts split every MCU row into segments of 8 MCUs (128 px) at VGA and 1080p,
+// 7 at 1000 px (63 MCUs a row): a window at the bottom decodes its own rows and columns alone.
+TEST(JpegRestart, EncodeImageSplitsEveryMcuRowIntoRestartSegments) {
   for (const cv::Size size : {cv::Size(640, 480), cv::Size(1920, 1080), cv::Size(1000, 1003)}) {
     const cv::Mat image = rendered(size.width, size.height);
     const Bytes jpeg = ptz::encodeImage(image, ptzstereo::image_t::ENCODING_JPEG, 90).data;
     const Header h = parseHeader(jpeg);
     EXPECT_EQ(h.sampling, (std::vector<int>{0x22, 0x11, 0x11})) << size;
     const int per_row = (size.width + 15) / 16, rows = (size.height + 15) / 16;
-    EXPECT_EQ(h.interval, per_row) << size;
+    const int interval = per_row % 8 == 0 ? 8 : 7;
+    EXPECT_EQ(h.interval, interval) << size;
     int markers = 0;
     for (size_t i = 0; i + 1 < jpeg.size(); ++i) {
       markers += jpeg[i] == 0xFF && jpeg[i + 1] >= 0xD0 && jpeg[i + 1] <= 0xD7;
     }
-    EXPECT_EQ(markers, rows - 1) << size;
+    EXPECT_EQ(markers, rows * (per_row / interval) - 1) << size;
     const perception::JpegRestartIndex index(jpeg.data(), jpeg.size());
     EXPECT_TRUE(index.usable()) << size;
     EXPECT_EQ(index.mcuHeight(), 16);
     EXPECT_EQ(index.mcuRows(), rows);
     EXPECT_EQ(index.bandStart(rows - 1), rows - 1);
+    EXPECT_EQ(index.tilesPerRow(), per_row / interval);
+    EXPECT_EQ(index.tileWidth(), interval * 16);
     // A window at the bottom: its rows and one MCU row above, not the image above them.
     const cv::Mat whole = cv::imdecode(jpeg, cv::IMREAD_COLOR);
     const cv::Rect bottom(size.width / 2, size.height - 20, 30, 20);
@@ -171,13 +176,15 @@ TEST(JpegRestart, EncodeImageWritesARestartAtEveryMcuRow) {
         << why;
     EXPECT_EQ(stats.restart_bands, 1);
     EXPECT_LE(stats.decoded_rows, 48) << size;
+    EXPECT_LE(stats.decoded_width, 3 * interval * 16) << size;  // its tiles, one each side
     EXPECT_EQ(cv::norm(parts[0], whole(bottom), cv::NORM_INF), 0.0);
     // Gray images: MCUs of 8x8, a marker every row of them too (the index takes colour only).
     cv::Mat gray;
     cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
     const Bytes g = ptz::encodeImage(gray, ptzstereo::image_t::ENCODING_JPEG, 90).data;
     EXPECT_EQ(parseHeader(g).sampling, std::vector<int>{0x11});
-    EXPECT_EQ(parseHeader(g).interval, (size.width + 7) / 8);
+    const int gray_per_row = (size.width + 7) / 8;
+    EXPECT_EQ(parseHeader(g).interval, gray_per_row % 8 == 0 ? 8 : 5) << size;  // 125 = 5 x 25
   }
 }
 
@@ -224,7 +231,65 @@ TEST(JpegRestart, WindowsAreExactlyTheFullDecodesPixels) {
   }
 }
 
-// Windows apart decode as bands apart, windows near as one; either way the same pixels.
+// A banded full scan's rows reduced (windows.hpp): exactly those rows of the whole image reduced,
+// from the rows' own restart segments where there are some, from the stream's top where not.
+TEST(JpegRestart, ReducedRowsAreExactlyThoseOfTheWholeReducedDecode) {
+  for (const cv::Size size : {cv::Size(640, 480), cv::Size(1920, 1080), cv::Size(1000, 1003)}) {
+    const cv::Mat image = rendered(size.width, size.height);
+    for (const bool restarts : {true, false}) {
+      const Bytes jpeg = restarts
+                             ? ptz::encodeImage(image, ptzstereo::image_t::ENCODING_JPEG, 90).data
+                             : imencode(image, {cv::IMWRITE_JPEG_QUALITY, 90});
+      const perception::JpegRestartIndex index(jpeg.data(), jpeg.size());
+      ASSERT_EQ(index.usable(), restarts);
+      for (const int scale : {2, 4, 8}) {
+        cv::Mat whole;
+        std::string why;
+        ASSERT_TRUE(perception::decodeJpegReduced(jpeg.data(), jpeg.size(), size.width, size.height,
+                                                  scale, &whole, &why))
+            << why;
+        const int h = size.height;
+        for (const auto& [row0, row1] :
+             std::vector<std::pair<int, int>>{{0, 40},
+                                              {8 * 16, 8 * 16 + 1},
+                                              {h / 2 / 8 * 8, h / 2 + 123},
+                                              {(h - 200) / 8 * 8, h},
+                                              {h / 3 / 8 * 8, h - 1},
+                                              {0, h}}) {
+          const std::string what = std::to_string(size.width) + "x" + std::to_string(h) +
+                                   (restarts ? " restarts" : " none") + " scale " +
+                                   std::to_string(scale) + " rows " + std::to_string(row0) + ".." +
+                                   std::to_string(row1);
+          cv::Mat rows;
+          perception::JpegWindowStats stats;
+          ASSERT_TRUE(perception::decodeJpegReducedRows(index, size.width, h, scale, row0, row1,
+                                                        &rows, &why, &stats))
+              << what << ": " << why;
+          const int r0 = row0 / scale, r1 = (row1 + scale - 1) / scale;
+          ASSERT_EQ(rows.size(), cv::Size(whole.cols, r1 - r0)) << what;
+          EXPECT_EQ(cv::norm(rows, whole.rowRange(r0, r1), cv::NORM_INF), 0.0) << what;
+          // Below the first two MCU rows, restarts spare the rows above (and those below).
+          EXPECT_EQ(stats.restart_bands, restarts && row0 >= 32 ? 1 : 0) << what;
+          if (restarts && row0 >= 32) {
+            EXPECT_LE(stats.decoded_rows, row1 - row0 + 64) << what;  // MCU rows, one each side
+          }
+        }
+        // Rows not in the image, or not starting a reduced row: refused, *out untouched.
+        cv::Mat untouched;
+        for (const auto& [row0, row1] :
+             std::vector<std::pair<int, int>>{{-8, 8}, {0, h + 1}, {40, 40}, {50, 10}, {1, 9}}) {
+          if (row0 % scale == 0 && row0 >= 0 && row0 < row1 && row1 <= h) continue;
+          EXPECT_FALSE(perception::decodeJpegReducedRows(index, size.width, h, scale, row0, row1,
+                                                         &untouched, &why));
+          EXPECT_TRUE(untouched.empty());
+        }
+      }
+    }
+  }
+}
+
+// Windows apart (in rows or in columns) decode as bands apart, windows near as one; either way
+// the same pixels.
 TEST(JpegRestart, BandsPerGroupOfWindows) {
   const cv::Mat image = rendered(1920, 1080);
   const Bytes jpeg = ptz::encodeImage(image, ptzstereo::image_t::ENCODING_JPEG, 90).data;
@@ -232,14 +297,15 @@ TEST(JpegRestart, BandsPerGroupOfWindows) {
   const perception::JpegRestartIndex index(jpeg.data(), jpeg.size());
   struct Case {
     std::vector<cv::Rect> rects;
-    int bands;  // from restart segments (a band at the top is the stream itself)
+    int bands;  // from restart segments: tiles of 128 px, one of context each side
   };
   for (const Case& c :
        std::vector<Case>{{{{100, 200, 50, 50}, {1500, 900, 60, 60}}, 2},
-                         {{{100, 200, 50, 50}, {1500, 210, 60, 60}}, 1},
-                         {{{100, 200, 50, 50}, {900, 264, 60, 60}}, 1},
-                         {{{0, 0, 50, 20}, {900, 500, 60, 60}, {9, 1070, 9, 10}}, 2},
-                         {{{0, 0, 50, 40}, {900, 48, 60, 60}}, 0}}) {
+                         {{{100, 200, 50, 50}, {1500, 210, 60, 60}}, 2},
+                         {{{100, 200, 50, 50}, {200, 230, 60, 60}}, 1},
+                         {{{100, 200, 50, 50}, {400, 264, 60, 60}}, 1},
+                         {{{0, 0, 50, 20}, {900, 500, 60, 60}, {9, 1070, 9, 10}}, 3},
+                         {{{0, 0, 50, 40}, {300, 48, 60, 60}}, 1}}) {
     std::vector<cv::Mat> parts;
     std::string why;
     perception::JpegWindowStats stats;
@@ -262,7 +328,7 @@ TEST(JpegRestart, DamagedRestartDataTakesTheStreamPathOrDecodesAsIt) {
   for (size_t i = 0; i + 1 < good.size(); ++i) {
     if (good[i] == 0xFF && good[i + 1] >= 0xD0 && good[i + 1] <= 0xD7) rst.push_back(i);
   }
-  ASSERT_EQ(rst.size(), 29u);
+  ASSERT_EQ(rst.size(), 30u * 5 - 1);  // 30 MCU rows of 5 segments
   size_t dri = 0;
   for (size_t i = 0; i + 5 < good.size() && dri == 0; ++i) {
     if (good[i] == 0xFF && good[i + 1] == 0xDD) dri = i + 4;

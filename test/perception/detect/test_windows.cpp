@@ -159,6 +159,7 @@ TEST(Windows, FullScanReasons) {
   std::string why;
   perception::WindowParams wp;
   wp.full_scan_every = 3;
+  wp.full_scan_in_bands = false;
   {
     perception::WindowParams off = wp;
     off.enabled = false;
@@ -197,6 +198,25 @@ TEST(Windows, FullScanReasons) {
   EXPECT_EQ(s.counts().at("frames_scanned_windowed"), 4);
   EXPECT_EQ(s.counts().at("frames_scanned_full"), 2);
   EXPECT_EQ(s.counts().at("full_scans_periodic"), 2);
+  EXPECT_EQ(s.counts().at("bands_scanned"), 0);
+
+  // In bands: every frame windowed, with band k mod 3 of the rows, each reaching 5 % of the
+  // height (24 px) into its neighbours.
+  perception::WindowParams banded = wp;
+  banded.full_scan_in_bands = true;
+  perception::WindowScanner b(banded, size, detector.exactMarginPx());
+  std::vector<cv::Rect> bands;
+  for (int i = 0; i < 4; ++i) {
+    perception::ScanPlan plan = b.plan(tracks, 0, lv, rv);
+    ASSERT_TRUE(b.detect(detector, &plan, fromMat(black), fromMat(black), &l, &r, &why)) << why;
+    EXPECT_FALSE(plan.full) << plan.reason;
+    bands.push_back(plan.band);
+  }
+  EXPECT_EQ(bands,
+            (std::vector<cv::Rect>{
+                {0, 0, 640, 184}, {0, 136, 640, 208}, {0, 296, 640, 184}, {0, 0, 640, 184}}));
+  EXPECT_EQ(b.counts().at("bands_scanned"), 4);
+  EXPECT_EQ(b.counts().at("frames_scanned_full"), 0);
 }
 
 TEST(Windows, RegionsInsideAWindowAreExactlyAFullScans) {
@@ -321,7 +341,10 @@ TEST(Windows, AJpegWindowIsExactlyThatPartOfAFullDecode) {
 // The loop's detection on a static scene: the red ball is tracked, windows follow it; a green box
 // appears away from them at frame `appear`; the next full scan (within full_scan_every frames)
 // finds it. Windowed frames give exactly the full scan's regions of the ball.
-TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
+// Whole every n-th frame, or a band a frame: the box is found within n frames of appearing; in
+// bands, in a windowed frame, exactly as a full scan finds it.
+void findsANewObject(bool in_bands) {
+  SCOPED_TRACE(in_bands ? "in bands" : "whole every n-th frame");
   const StereoRig rig = StereoRig::makeDefault();
   const perception::Detector detector(defaultClasses());
   const std::vector<std::string> names = {"red_ball", "green_box", "blue_ball"};
@@ -334,6 +357,7 @@ TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
   auto sim_before = simulator(rig, before, pose), sim_after = simulator(rig, after, pose);
   perception::WindowParams wp;
   wp.full_scan_every = 5;
+  wp.full_scan_in_bands = in_bands;
   perception::WindowScanner scanner(wp, {rig.left.width, rig.left.height},
                                     detector.exactMarginPx());
   perception::Tracker tracker;
@@ -350,7 +374,9 @@ TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
     std::string why;
     ASSERT_TRUE(scanner.detect(detector, &plan, fromMat(f.left), fromMat(f.right), &lr, &rr, &why))
         << why;
-    if (!plan.full) {
+    bool box_seen = false;
+    for (const auto& r : lr) box_seen = box_seen || r.class_index == 1;
+    if (!plan.full && !box_seen) {
       ++windowed;
       // The ball's regions are the full scan's; the box (when there) is not seen.
       std::vector<perception::Region> fl = detector.detect(f.left), fr = detector.detect(f.right);
@@ -366,9 +392,13 @@ TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
     const auto objects = perception::associate(lr, rr, lv, rv, {});
     tracker.update(
         t, perception::trackMeasurements(objects, lr, rr, lv, rv, names, 1.3, tracker.tracks(), t));
-    for (const auto& r : lr) {
-      if (r.class_index == 1 && found_at < 0) {
-        found_at = i;
+    if (box_seen) {
+      found_at = i;
+      if (in_bands) {
+        EXPECT_FALSE(plan.full) << plan.reason;
+        expectSame(lr, detector.detect(f.left), "left frame " + std::to_string(i));
+        expectSame(rr, detector.detect(f.right), "right frame " + std::to_string(i));
+      } else {
         EXPECT_TRUE(plan.full) << "found in a window";
       }
     }
@@ -376,6 +406,14 @@ TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
   EXPECT_GE(windowed, 5);
   ASSERT_GE(found_at, appear);
   EXPECT_LT(found_at, appear + wp.full_scan_every);
+}
+
+TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
+  findsANewObject(false);
+}
+
+TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundExactlyInItsBand) {
+  findsANewObject(true);
 }
 
 // A track whose radius is too small for its object: the window cuts the ball; grown once it
