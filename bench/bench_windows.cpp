@@ -21,6 +21,7 @@
 #include "perception/detect/tracker.hpp"
 #include "perception/detect/windows.hpp"
 #include "sim/simulator.hpp"
+#include "support/detect_scene.hpp"
 
 using ptz::bench::Clock;
 using ptz::bench::ms;
@@ -58,7 +59,7 @@ std::vector<Frame> render(const ptz::StereoRig& rig, const ptz::sim::Scene& scen
     sim.advanceTo(t + 0.01);
     const ptz::sim::SimFrame f = sim.capture();
     Frame fr;
-    // As ptz-sim sends them (restart markers at every MCU row: jpeg_restart.hpp).
+    // As ptz-sim sends them (restart markers splitting every MCU row: jpeg_restart.hpp).
     fr.left = ptz::encodeImage(f.left, ptzstereo::image_t::ENCODING_JPEG, 90).data;
     fr.right = ptz::encodeImage(f.right, ptzstereo::image_t::ENCODING_JPEG, 90).data;
     fr.left_pose = f.left_pose;
@@ -70,23 +71,18 @@ std::vector<Frame> render(const ptz::StereoRig& rig, const ptz::sim::Scene& scen
 }
 
 // A JPEG as ptz-detect reads it: the whole by cv::imdecode, parts by decodeJpegWindows, the
-// pyramid's level by decodeJpegReduced.
+// pyramid's level by decodeJpegReducedRows.
 perception::ImagePixels fromJpeg(const std::vector<uint8_t>& jpeg, cv::Size size) {
-  return {[&jpeg, size](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts,
-                        std::string* why) {
-            if (rects.size() == 1 && rects[0] == cv::Rect({0, 0}, size)) {
-              parts->assign(1,
-                            cv::imdecode(jpeg, cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION));
-              return !(*parts)[0].empty();
-            }
-            return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height,
-                                                 rects, parts, why);
-          },
-          [&jpeg, size](int scale, int row0, int row1, cv::Mat* reduced, std::string* why) {
-            return perception::decodeJpegReducedRows(
-                perception::JpegRestartIndex(jpeg.data(), jpeg.size()), size.width, size.height,
-                scale, row0, row1, reduced, why);
-          }};
+  perception::ImagePixels pixels = ptz::test::jpegPixels(jpeg, size);
+  pixels.parts = [&jpeg, size, parts = pixels.parts](const std::vector<cv::Rect>& rects,
+                                                     std::vector<cv::Mat>* out, std::string* why) {
+    if (rects.size() == 1 && rects[0] == cv::Rect({0, 0}, size)) {
+      out->assign(1, cv::imdecode(jpeg, cv::IMREAD_COLOR | cv::IMREAD_IGNORE_ORIENTATION));
+      return !(*out)[0].empty();
+    }
+    return parts(rects, out, why);
+  };
+  return pixels;
 }
 
 // Raw BGR pixels (ptz-detect's raw frames): parts are views, the level cv::resize INTER_AREA.

@@ -379,11 +379,15 @@ void jpegs() {
         with(image_t::PIXEL_BGR8, 40, 8,
              jpeg(picture(40, 8, false),
                   {cv::IMWRITE_JPEG_OPTIMIZE, 1, cv::IMWRITE_JPEG_RST_INTERVAL, 1})));
-  // As ptz-sim and ptz-camera send them (encodeImage: a restart marker at every MCU row), tall
-  // enough that a part's rows are decoded from restart segments alone; and every second row.
+  // As ptz-sim and ptz-camera send them (encodeImage: restart markers splitting every MCU row),
+  // tall enough that a part's rows are decoded from restart segments alone; wide enough for three
+  // tiles of 8 MCUs a row; and every second row.
   write("fuzz_jpeg", "row_restarts",
         with(image_t::PIXEL_BGR8, 48, 96,
              ptz::encodeImage(picture(48, 96, false), image_t::ENCODING_JPEG, 90).data));
+  write("fuzz_jpeg", "tiled_restarts",
+        with(image_t::PIXEL_BGR8, 384, 96,
+             ptz::encodeImage(picture(384, 96, false), image_t::ENCODING_JPEG, 90).data));
   write("fuzz_jpeg", "restarts_every_two_rows",
         with(image_t::PIXEL_BGR8, 40, 112,
              jpeg(picture(40, 112, false),

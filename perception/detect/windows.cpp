@@ -116,7 +116,7 @@ ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const
     cv::Rect l, r;
     if (!trackWindow(left, t, t_s, p_, &l) || !trackWindow(right, t, t_s, p_, &r)) {
       // A coasting track unseen for a while: its uncertainty reaches behind a camera and bounds
-      // no window; the periodic full scan looks for it, as for a new object.
+      // no window; the bands (or the periodic full scan) look for it, as for a new object.
       if (t.state == TrackState::kCoasting) {
         ++plan.unbounded;
         continue;
@@ -124,7 +124,8 @@ ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const
       plan.reason = "behind";
       return plan;
     }
-    // A window wholly outside an image has nothing to scan there (the periodic full scan looks);
+    // A window wholly outside an image has nothing to scan there (the bands or the periodic full
+    // scan look);
     // one across the border is cut to the image: the crop's edge is then the image's, exact.
     const cv::Rect image(0, 0, size_.width, size_.height);
     if (!(l & image).empty()) lw.push_back(l & image);
@@ -138,8 +139,11 @@ ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const
   } else {
     plan.left = mergeRects(lw);
     plan.right = mergeRects(rw);
-    if (bands())
+    if (bands()) {
+      // Every windowed plan takes the next band (an empty one too: n bands of fewer rows).
       plan.band = bandRows(next_band_, pyramidScale(size_.width, p_.full_scan_max_width_px));
+      next_band_ = (next_band_ + 1) % p_.full_scan_every;
+    }
     plan.reason = refuse(plan.left);
     if (plan.reason.empty()) plan.reason = refuse(plan.right);
     plan.full = !plan.reason.empty();
@@ -189,8 +193,9 @@ cv::Rect WindowScanner::bandRows(int k, int scale) const {
   const int64_t n = p_.full_scan_every, h = size_.height;
   const int overlap = static_cast<int>(std::ceil(p_.band_overlap_fraction * size_.height));
   int y0 = std::max(0, static_cast<int>(k * h / n) - overlap);
-  y0 -= y0 % scale;  // a reduced row starts there
-  const int y1 = std::min(size_.height, static_cast<int>((k + 1) * h / n) + overlap);
+  y0 -= y0 % scale;  // whole reduced rows: those of the whole image reduced
+  int y1 = std::min(size_.height, static_cast<int>((k + 1) * h / n) + overlap);
+  y1 = std::min(size_.height, (y1 + scale - 1) / scale * scale);
   return cv::Rect(0, y0, size_.width, y1 - y0);
 }
 
@@ -223,15 +228,15 @@ bool WindowScanner::bandWindows(const Detector& detector, int scale, const cv::R
   const int reduced_height = reducedSize(size_, scale).height;
   std::vector<Region> untracked;
   for (Region c : candidates) {
-    // In a track's window already: that window's scan finds it exactly (or, cut, grows).
-    c.bbox.y += band.y / scale;
-    const cv::Rect full(c.bbox.x * scale, c.bbox.y * scale, c.bbox.width * scale,
-                        c.bbox.height * scale);
+    // Inside a track's window already (its box scaled back, a reduced pixel's slack around):
+    // that window's scan finds it exactly. One only touching a window is kept: the window's scan
+    // keeps only what is inside it, and merged with it, its own window holds it.
+    const cv::Rect full((c.bbox.x - 1) * scale, (c.bbox.y + band.y / scale - 1) * scale,
+                        (c.bbox.width + 2) * scale, (c.bbox.height + 2) * scale);
     if (std::any_of(tracked.begin(), tracked.end(),
-                    [&](const cv::Rect& w) { return !(w & full).empty(); })) {
+                    [&](const cv::Rect& w) { return (w & full) == full; })) {
       continue;
     }
-    c.bbox.y -= band.y / scale;
     // One that may go on across the band's edge (the filters reach margin_px_ from it): its
     // window runs to the image's edge that way, so it need not be cut and grown for it.
     const bool up = band.y > 0 && c.bbox.y <= margin_px_;
@@ -328,8 +333,6 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
       }
     }
   }
-  // A band scanned, or covered by the full scan its frame fell back to: the next one's turn.
-  if (!plan->band.empty()) next_band_ = (next_band_ + 1) % p_.full_scan_every;
   if (plan->full) {
     plan->left.clear();
     plan->right.clear();

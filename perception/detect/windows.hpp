@@ -1,9 +1,9 @@
 // Windows for speed (no LCM): with confirmed tracks, detection runs on a window around each
 // track's predicted image in each camera instead of the whole frame, and looks for new objects in
-// one band of the image's rows a frame (so the whole image every few frames, at a fifth of the
-// cost a frame: no frame pays a whole scan), or scans the whole frame every few frames; and
-// whenever a window could miss its object. A window's
-// regions are those of a full scan: the detector works on a crop with enough margin for its
+// one band of the image's rows a frame (so the whole image every few frames, about a third of a
+// whole scan's cost a frame with the bands' overlap: no frame pays a whole scan), or scans the
+// whole frame every few frames; and whenever a window could miss its object. A window's regions
+// are those of a full scan: the detector works on a crop with enough margin for its
 // filters, and keeps only regions strictly inside the window. A window across the image's border
 // is cut to the image (the image's edge is exact). A full scan of a wide image finds its objects on
 // the image reduced by a power of two and detects at full resolution in windows around them

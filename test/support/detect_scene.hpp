@@ -4,8 +4,11 @@
 #include <opencv2/core.hpp>
 
 #include <string>
+#include <vector>
 
 #include "perception/detect/detector.hpp"
+#include "perception/detect/jpeg_window.hpp"
+#include "perception/detect/windows.hpp"
 #include "sim/scene.hpp"
 
 namespace ptz::test {
@@ -28,6 +31,21 @@ inline sim::SceneObject object(const std::string& cls, sim::SceneObject::Shape s
   o.color_bgr = bgr;
   o.trajectory.centre_m = centre;
   return o;
+}
+
+// A JPEG (of `size`, kept alive by the caller) as ptz-detect reads it: parts by
+// decodeJpegWindows, reduced rows by decodeJpegReducedRows.
+inline perception::ImagePixels jpegPixels(const std::vector<uint8_t>& jpeg, cv::Size size) {
+  return {[&jpeg, size](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts,
+                        std::string* why) {
+            return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height,
+                                                 rects, parts, why);
+          },
+          [&jpeg, size](int scale, int row0, int row1, cv::Mat* reduced, std::string* why) {
+            return perception::decodeJpegReducedRows(
+                perception::JpegRestartIndex(jpeg.data(), jpeg.size()), size.width, size.height,
+                scale, row0, row1, reduced, why);
+          }};
 }
 
 // Colours the default classes take: red_ball, green_box.

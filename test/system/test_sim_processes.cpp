@@ -1,4 +1,5 @@
 // ptz-sim as a separate process over real LCM (run inside a private network namespace).
+#include <glob.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -235,10 +236,14 @@ TEST(SimProcess, NoSetpointMovesAnAxisBeyondItsLimits) {
 // clock every other process judges freshness by, captured just before they are published,
 // instead of an hour behind it (their start time plus the steady clock's count).
 TEST(SimProcess, StampsFollowAStepOfTheWallClock) {
-  const std::string lib = "/usr/lib/x86_64-linux-gnu/faketime/libfaketime.so.1";
-  if (!ptz::test::exists(lib)) {
-    if (ptz::test::skipAllowed()) GTEST_SKIP() << lib << " absent (Debian's libfaketime)";
-    FAIL() << lib << " absent in CI (scripts/install-deps installs libfaketime)";
+  glob_t found{};  // Debian's libfaketime, in the machine's multiarch folder
+  const bool have =
+      glob("/usr/lib/*/faketime/libfaketime.so.1", 0, nullptr, &found) == 0 && found.gl_pathc > 0;
+  const std::string lib = have ? found.gl_pathv[0] : "";
+  globfree(&found);
+  if (!have) {
+    if (ptz::test::skipAllowed()) GTEST_SKIP() << "libfaketime.so.1 absent (Debian's libfaketime)";
+    FAIL() << "libfaketime.so.1 absent in CI (scripts/install-deps installs libfaketime)";
   }
   char dir[] = "/tmp/ptz_faketime_XXXXXX";
   ASSERT_NE(mkdtemp(dir), nullptr);
@@ -277,15 +282,19 @@ TEST(SimProcess, StampsFollowAStepOfTheWallClock) {
   EXPECT_EQ(sim.wait(0ms), 0);
   ASSERT_GE(stamps.frames.size(), before + 30) << "too few frames after the step";
   // Each frame's capture a render's time before its publish (both on the process's wall clock):
-  // under a second, an hour on either side of the step.
-  for (const auto& [utime, publish_utime] : stamps.frames) {
-    EXPECT_GE(publish_utime - utime, 0);
-    EXPECT_LT(publish_utime - utime, 1'000'000);
-  }
-  for (const auto& [utime, publish_utime] : stamps.states) {
-    EXPECT_LT(std::abs(publish_utime - utime), 1'000'000);
-  }
-  EXPECT_GT(stamps.states.size(), states_before);
+  // under a second, an hour on either side of the step; but for one frame and one state at
+  // most, stamped before the step and published after it (as on a real clock).
+  const auto straddling = [](const std::vector<std::pair<int64_t, int64_t>>& v) {
+    int n = 0;
+    for (const auto& [utime, publish_utime] : v) {
+      n += std::abs(publish_utime - utime) >= 1'000'000;
+    }
+    return n;
+  };
+  for (const auto& [utime, publish_utime] : stamps.frames) EXPECT_GE(publish_utime, utime);
+  EXPECT_LE(straddling(stamps.frames), 1);
+  EXPECT_LE(straddling(stamps.states), 1);
+  EXPECT_GT(stamps.states.size(), states_before + 100);
   // And the step shows in the stamps: an hour and the frames' few seconds from first to last.
   const int64_t span_us = stamps.frames.back().first - stamps.frames.front().first;
   EXPECT_GT(span_us, 3600'000'000LL);

@@ -63,20 +63,6 @@ perception::ImagePixels fromMat(const cv::Mat& image) {
       });
 }
 
-// A JPEG as ptz-detect reads it: parts by decodeJpegWindows, reduced by decodeJpegReduced.
-perception::ImagePixels fromJpeg(const std::vector<uint8_t>& jpeg, cv::Size size) {
-  return {[&jpeg, size](const std::vector<cv::Rect>& rects, std::vector<cv::Mat>* parts,
-                        std::string* why) {
-            return perception::decodeJpegWindows(jpeg.data(), jpeg.size(), size.width, size.height,
-                                                 rects, parts, why);
-          },
-          [&jpeg, size](int scale, int row0, int row1, cv::Mat* reduced, std::string* why) {
-            return perception::decodeJpegReducedRows(
-                perception::JpegRestartIndex(jpeg.data(), jpeg.size()), size.width, size.height,
-                scale, row0, row1, reduced, why);
-          }};
-}
-
 // Full scans only (windows off), pyramid above max_width_px (0: never).
 std::unique_ptr<perception::WindowScanner> fullScanner(const perception::Detector& detector,
                                                        cv::Size size, int max_width_px) {
@@ -231,7 +217,8 @@ TEST(Pyramid, At1080pItsRegionsAreAFullResolutionFullScans) {
       ASSERT_TRUE(cv::imencode(".jpg", f.right, rj, {cv::IMWRITE_JPEG_QUALITY, 90}));
       const Scan want_jpeg = scan(*full, detector, fromMat(cv::imdecode(lj, cv::IMREAD_COLOR)),
                                   fromMat(cv::imdecode(rj, cv::IMREAD_COLOR)));
-      const Scan jpeg = scan(*pyramid, detector, fromJpeg(lj, size), fromJpeg(rj, size));
+      const Scan jpeg = scan(*pyramid, detector, ptz::test::jpegPixels(lj, size),
+                             ptz::test::jpegPixels(rj, size));
       EXPECT_TRUE(jpeg.pyramid) << what;
       expectSame(jpeg.left, want_jpeg.left, "JPEG, left, " + what);
       expectSame(jpeg.right, want_jpeg.right, "JPEG, right, " + what);

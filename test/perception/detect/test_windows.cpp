@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "common/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/jpeg_window.hpp"
 #include "perception/detect/stereo.hpp"
@@ -449,4 +450,67 @@ TEST(Windows, AWindowThatCutsItsObjectGrowsOnceThenGivesUpToAFullScan) {
     expectSame(l, full_l, "left, radius " + std::to_string(radius_m));
     expectSame(r, full_r, "right, radius " + std::to_string(radius_m));
   }
+}
+
+// At 1080p, JPEG as ptz-detect reads it (bands found on their reduced rows, decoded from the
+// rows' own restart segments): a new box taller than a band appears beside the tracked ball. It
+// is found within a cycle of bands, in a windowed frame, exactly as a full-resolution full scan
+// of the same decoded image finds it, though every band cuts it (its window runs on to the
+// image's edge); the ball stays in its window all along.
+TEST(Windows, At1080pANewObjectTallerThanABandIsFoundExactly) {
+  const StereoRig rig = StereoRig::makeDefault().atSize(1920, 1080);
+  const cv::Size size(1920, 1080);
+  const perception::Detector detector(defaultClasses());
+  const std::vector<std::string> names = {"red_ball", "green_box", "blue_ball"};
+  const PtzPose pose{0, 0, 1};
+  sim::Scene before, after;
+  before.objects = {object("red_ball", sim::SceneObject::Shape::kSphere, {0.3, 0.05, 2.5}, kRed)};
+  after.objects = before.objects;
+  sim::SceneObject box =
+      object("green_box", sim::SceneObject::Shape::kBox, {-0.6, -0.1, 2.2}, kGreen);
+  box.half_extents_m = {0.25, 0.25, 0.25};
+  after.objects.push_back(box);
+  auto sim_before = simulator(rig, before, pose), sim_after = simulator(rig, after, pose);
+  perception::WindowParams wp;  // the defaults: 5 bands reaching 5 % into their neighbours
+  perception::WindowScanner scanner(wp, size, detector.exactMarginPx());
+  perception::Tracker tracker;
+  const CameraView lv = rig.view(Side::kLeft, pose), rv = rig.view(Side::kRight, pose);
+  const int appear = 12;
+  int found_at = -1;
+  int64_t full_before = -1;  // whole scans before the box appears (the ball's track not yet sure)
+  for (int i = 0; i < 30 && found_at < 0; ++i) {
+    const double t = 0.1 + i / 30.0;
+    if (i == appear) full_before = scanner.counts().at("frames_scanned_full");
+    sim::Simulator& s = i < appear ? *sim_before : *sim_after;
+    s.advanceTo(t);
+    const sim::SimFrame f = s.capture();
+    const std::vector<uint8_t> lj =
+        ptz::encodeImage(f.left, ptzstereo::image_t::ENCODING_JPEG, 90).data;
+    const std::vector<uint8_t> rj =
+        ptz::encodeImage(f.right, ptzstereo::image_t::ENCODING_JPEG, 90).data;
+    perception::ScanPlan plan = scanner.plan(tracker.tracks(), t, lv, rv);
+    std::vector<perception::Region> lr, rr;
+    std::string why;
+    ASSERT_TRUE(scanner.detect(detector, &plan, ptz::test::jpegPixels(lj, size),
+                               ptz::test::jpegPixels(rj, size), &lr, &rr, &why))
+        << why;
+    const auto objects = perception::associate(lr, rr, lv, rv, {});
+    tracker.update(
+        t, perception::trackMeasurements(objects, lr, rr, lv, rv, names, 1.3, tracker.tracks(), t));
+    bool box_seen = false;
+    for (const auto& r : lr) box_seen = box_seen || r.class_index == 1;
+    if (!box_seen) continue;
+    found_at = i;
+    EXPECT_FALSE(plan.full) << plan.reason;
+    EXPECT_FALSE(plan.band.empty());
+    EXPECT_GT(lr.back().bbox.height, plan.band.height) << "the box is not taller than a band";
+    const std::string what = "frame " + std::to_string(i);
+    expectSame(lr, detector.detect(cv::imdecode(lj, cv::IMREAD_COLOR)), "left " + what);
+    expectSame(rr, detector.detect(cv::imdecode(rj, cv::IMREAD_COLOR)), "right " + what);
+  }
+  ASSERT_GE(found_at, appear);
+  EXPECT_LT(found_at, appear + wp.full_scan_every);
+  EXPECT_EQ(scanner.counts().at("frames_scanned_full"), full_before);  // none since
+  EXPECT_LT(full_before, appear);
+  EXPECT_GT(scanner.counts().at("bands_scanned"), 0);
 }
