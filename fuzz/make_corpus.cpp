@@ -397,6 +397,36 @@ void jpegs() {
         with(image_t::PIXEL_BGR8, 16, 12, jpeg(picture(32, 24, false))));
 }
 
+// Recorded files as ptz-camera reads them: the published size (2 + 2 bytes), then the file.
+void recorded_jpegs() {
+  auto sized = [](int width, int height, const Bytes& file) {
+    Bytes b = {static_cast<uint8_t>(width >> 8), static_cast<uint8_t>(width),
+               static_cast<uint8_t>(height >> 8), static_cast<uint8_t>(height)};
+    b.insert(b.end(), file.begin(), file.end());
+    return b;
+  };
+  using ptzstereo::image_t;
+  const Bytes recorded = ptz::encodeImage(picture(48, 32, false), image_t::ENCODING_JPEG, 90).data;
+  write("fuzz_pass_through_jpeg", "recorded", sized(48, 32, recorded));
+  write("fuzz_pass_through_jpeg", "any_size", sized(0, 0, jpeg(picture(40, 24, false))));
+  Bytes padded = recorded;
+  padded.insert(padded.end(), 8, 0);  // some cameras pad after the end marker
+  write("fuzz_pass_through_jpeg", "padded", sized(48, 32, padded));
+  write("fuzz_pass_through_jpeg", "other_size", sized(24, 16, recorded));
+  write("fuzz_pass_through_jpeg", "grey", sized(16, 16, jpeg(picture(16, 16, true))));
+  write("fuzz_pass_through_jpeg", "progressive",
+        sized(32, 24, jpeg(picture(32, 24, false), {cv::IMWRITE_JPEG_PROGRESSIVE, 1})));
+  write("fuzz_pass_through_jpeg", "cut_short",
+        sized(48, 32, Bytes(recorded.begin(), recorded.begin() + recorded.size() / 2)));
+  // An APP1 "Exif" segment after the start marker (its orientation would turn the image).
+  Bytes exif(recorded.begin(), recorded.begin() + 2);
+  const Bytes app1 = {0xFF, 0xE1, 0x00, 0x10, 'E',  'x', 'i', 'f', 0,
+                      0,    'M',  'M',  0,    0x2A, 0,   0,   0,   0x08};
+  exif.insert(exif.end(), app1.begin(), app1.end());
+  exif.insert(exif.end(), recorded.begin() + 2, recorded.end());
+  write("fuzz_pass_through_jpeg", "exif", sized(48, 32, exif));
+}
+
 void visca_bytes() {
   for (int nibbles : {4, 5}) {
     ptz::driver::ViscaModel m;
@@ -609,6 +639,7 @@ int main(int argc, char** argv) {
   ::mkdir(g_out.c_str(), 0755);
   messages();
   jpegs();
+  recorded_jpegs();
   visca_bytes();
   pelco_bytes();
   files(argv[1]);
