@@ -358,12 +358,19 @@ void messages() {
   write("fuzz_sim_truth", "two_objects", encode(tr));
 }
 
+// Width and height, 2 bytes each big-endian, then data: the JPEG targets' input.
+Bytes sizedPrefix(int width, int height, const Bytes& data) {
+  Bytes b = {static_cast<uint8_t>(width >> 8), static_cast<uint8_t>(width),
+             static_cast<uint8_t>(height >> 8), static_cast<uint8_t>(height)};
+  b.insert(b.end(), data.begin(), data.end());
+  return b;
+}
+
 void jpegs() {
   auto with = [](int8_t pixel_format, int width, int height, const Bytes& data) {
-    Bytes b = {static_cast<uint8_t>(pixel_format), static_cast<uint8_t>(width >> 8),
-               static_cast<uint8_t>(width), static_cast<uint8_t>(height >> 8),
-               static_cast<uint8_t>(height)};
-    b.insert(b.end(), data.begin(), data.end());
+    Bytes b = {static_cast<uint8_t>(pixel_format)};
+    const Bytes sized = sizedPrefix(width, height, data);
+    b.insert(b.end(), sized.begin(), sized.end());
     return b;
   };
   using ptzstereo::image_t;
@@ -399,12 +406,7 @@ void jpegs() {
 
 // Recorded files as ptz-camera reads them: the published size (2 + 2 bytes), then the file.
 void recorded_jpegs() {
-  auto sized = [](int width, int height, const Bytes& file) {
-    Bytes b = {static_cast<uint8_t>(width >> 8), static_cast<uint8_t>(width),
-               static_cast<uint8_t>(height >> 8), static_cast<uint8_t>(height)};
-    b.insert(b.end(), file.begin(), file.end());
-    return b;
-  };
+  const auto sized = sizedPrefix;
   using ptzstereo::image_t;
   const Bytes recorded = ptz::encodeImage(picture(48, 32, false), image_t::ENCODING_JPEG, 90).data;
   write("fuzz_pass_through_jpeg", "recorded", sized(48, 32, recorded));

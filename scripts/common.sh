@@ -18,6 +18,10 @@ else
   PTZ_OUT=${PTZ_OUT:-$PTZ_ROOT/out}
 fi
 
+# ptz-depth's niceness in scripts/demo and scripts/run-host, as deploy/systemd's Nice=10: tracking
+# first, yet enough CPU beside two busy cores (at 19 a restarted ptz-depth sent nothing for 20 s).
+PTZ_DEPTH_NICE=10
+
 # ptz_bin NAME: the path of program NAME (ptz-sim, ptz-detect, ...) in this layout. A program not
 # there is named with what to do; the path is printed all the same (its run then fails by name).
 ptz_bin() {
