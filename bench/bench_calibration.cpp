@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/calibrate/calibration.hpp"
 #include "perception/calibrate/calibration_files.hpp"
 

@@ -14,7 +14,7 @@
 
 #include "bench_util.hpp"
 #include "common/config.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/depth/cloud.hpp"
 #include "perception/depth/depth.hpp"
 #include "sim/simulator.hpp"

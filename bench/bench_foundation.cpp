@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/simulator.hpp"
 #include "support/child_process.hpp"

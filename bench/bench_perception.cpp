@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/stereo.hpp"
 #include "sim/simulator.hpp"

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 
 namespace ptz::bench {
 

@@ -25,10 +25,13 @@ set_property(TARGET ptzstereo_lcmtypes APPEND PROPERTY INTERFACE_COMPILE_OPTIONS
   $<INSTALL_INTERFACE:-fno-strict-aliasing>)
 install(TARGETS ptz_core ptz_transport ptzstereo_lcmtypes EXPORT ptzstereoTargets
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
-set(PTZ_PUBLIC_HEADERS config.hpp freshness.hpp measure.hpp message_check.hpp plant.hpp rig.hpp
-  storage_guard.hpp transport.hpp)
+set(PTZ_PUBLIC_HEADERS config.hpp freshness.hpp measure.hpp plant.hpp rig.hpp storage_guard.hpp)
 list(TRANSFORM PTZ_PUBLIC_HEADERS PREPEND ${PROJECT_SOURCE_DIR}/common/)
 install(FILES ${PTZ_PUBLIC_HEADERS} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ptzstereo/common)
+set(PTZ_TRANSPORT_HEADERS intake.hpp message_check.hpp transport.hpp)
+list(TRANSFORM PTZ_TRANSPORT_HEADERS PREPEND ${PROJECT_SOURCE_DIR}/common/transport/)
+install(FILES ${PTZ_TRANSPORT_HEADERS}
+  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ptzstereo/common/transport)
 
 set(PTZ_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/ptzstereo)
 install(EXPORT ptzstereoTargets NAMESPACE ptzstereo:: DESTINATION ${PTZ_CMAKE_DIR})

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "tools/foxglove/convert.hpp"
 

@@ -17,8 +17,8 @@
 #include <algorithm>
 #include <vector>
 
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "perception/detect/jpeg_window.hpp"
 

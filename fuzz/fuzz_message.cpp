@@ -1,4 +1,4 @@
-// One LCM message type's checked decode (common/message_check.hpp), built once per type with
+// One LCM message type's checked decode (common/transport/message_check.hpp), built once per type with
 // PTZ_FUZZ_MESSAGE set to its name (fuzz/CMakeLists.txt). Properties:
 // - checkEncoding allocates nothing worth counting, and decodeChecked agrees with it;
 // - rejected: nothing allocated beyond the input's size;
@@ -12,8 +12,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"

@@ -10,8 +10,8 @@
 
 #include <string>
 
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "ptz_driver/cameras/sources/jpeg_file.hpp"
 

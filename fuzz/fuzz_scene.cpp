@@ -9,7 +9,7 @@
 #include "common/config.hpp"
 #include "common/freshness.hpp"
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
 #include "sim/scene.hpp"
 

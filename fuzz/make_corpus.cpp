@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptz_driver/emulators/visca_camera_emulator.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 #include "ptz_driver/heads/visca/visca.hpp"

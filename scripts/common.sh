@@ -38,12 +38,23 @@ ptz_bin() {
   echo "$PTZ_BUILD/$name"
 }
 
-# Debian 12 / Ubuntu packages the project builds, tests and runs with.
+# Debian 12 / Ubuntu packages: what builds and runs the programs (scripts/demo installs only
+# these, ccache included), then what the tests, fuzz targets and tools for them add.
+PTZ_DEMO_PACKAGES=(
+  build-essential cmake pkg-config ccache
+  liblcm-dev liblcm-bin libglib2.0-dev
+  libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev
+  libgpiod-dev libsystemd-dev libjpeg-dev
+  # Foxglove: MCAP export (JSON messages, zstd chunks) and the WebSocket bridge
+  nlohmann-json3-dev libzstd-dev zlib1g-dev libwebsocketpp-dev libasio-dev
+  # ptz-report's plots; the demo's private network
+  gnuplot-nox iproute2
+)
 PTZ_PACKAGES=(
-  build-essential cmake pkg-config clang-format
-  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
-  libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev pcl-tools
-  libgpiod-dev libgtest-dev libsystemd-dev libjpeg-dev
+  "${PTZ_DEMO_PACKAGES[@]}" clang-format pcl-tools
+  libgtest-dev
+  # lcm-spy and the types' jar
+  liblcm-java default-jdk-headless libjchart2d-java
   # a step of the wall clock under a real process (test/system/test_sim_processes.cpp)
   libfaketime
   # the fuzz targets (fuzz/, scripts/fuzz): Debian 12's clang 14, libFuzzer and sanitizer runtimes
@@ -52,20 +63,30 @@ PTZ_PACKAGES=(
   gstreamer1.0-plugins-base gstreamer1.0-plugins-good gstreamer1.0-plugins-bad gstreamer1.0-rtsp
   libgstrtspserver-1.0-dev
   gstreamer1.0-tools
-  default-jdk-headless libjchart2d-java
-  iproute2 nftables xvfb x11-apps imagemagick xdotool gnuplot-nox
-  # Foxglove: MCAP export (JSON messages, zstd chunks) and the WebSocket bridge
-  nlohmann-json3-dev libzstd-dev zlib1g-dev libwebsocketpp-dev libasio-dev
+  nftables xvfb x11-apps imagemagick xdotool
 )
+
+# The programs scripts/demo runs (it builds only these).
+PTZ_DEMO_PROGRAMS=(ptz-sim ptz-detect ptz-control ptz-depth ptz-wait-for ptz-log-summary ptz-report)
 
 ptz_sudo() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
 
+# ptz_install_deps [demo]: installs what is missing of PTZ_PACKAGES (of PTZ_DEMO_PACKAGES).
 ptz_install_deps() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0  # an install's package declares what it needs
+  if [ "${1:-}" = demo ]; then
+    ptz_install_packages "${PTZ_DEMO_PACKAGES[@]}"
+  else
+    ptz_install_packages "${PTZ_PACKAGES[@]}"
+  fi
+}
+
+# ptz_install_packages PACKAGE...: apt-get installs those not installed yet.
+ptz_install_packages() {
   local missing=()
-  for p in "${PTZ_PACKAGES[@]}"; do
+  for p in "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if [ ${#missing[@]} -eq 0 ]; then
@@ -89,10 +110,28 @@ ptz_install_node() {
   ptz_sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
 }
 
+# ptz_build [CMAKE_ARGS...]: configures and builds everything.
 ptz_build() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0  # nothing to build: the programs are installed
   cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
-  cmake --build "$PTZ_BUILD" -j2
+  cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)"
+}
+
+# ptz_build_programs NAME...: configures (as ptz_build) and builds only these programs and what
+# they link: a first demo does not wait for the tests and fuzz targets.
+# A new build dir is configured without the tests (their packages may be missing); one that has
+# them keeps them.
+ptz_build_programs() {
+  [ "$PTZ_INSTALLED" = 0 ] || return 0
+  local testing=()
+  [ -f "$PTZ_BUILD/CMakeCache.txt" ] || testing=(-DBUILD_TESTING=OFF)
+  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${testing[@]}" >/dev/null
+  cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)" --target "$@"
+}
+
+# Build jobs: one a core (PTZ_JOBS overrides).
+ptz_jobs() {
+  echo "${PTZ_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 }
 
 # Prints what is wrong with the host's LCM networking and the exact fix; returns non-zero then.

@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "common/freshness.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "sim/sim_messages.hpp"
 #include "sim/simulator.hpp"

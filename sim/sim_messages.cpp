@@ -1,6 +1,6 @@
 #include "sim/sim_messages.hpp"
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 
 namespace ptz::sim {
 namespace {

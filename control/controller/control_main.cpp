@@ -8,7 +8,7 @@
 #include <optional>
 
 #include "common/freshness.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "control/controller/controller.hpp"
 #include "control/controller/delay_monitor.hpp"
 #include "ptzstereo/control_state_t.hpp"

@@ -9,7 +9,7 @@
 #include <memory>
 #include <sstream>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/calibrate/calibration.hpp"
 #include "perception/calibrate/calibration_files.hpp"
 #include "perception/calibrate/calibration_live.hpp"

@@ -10,7 +10,7 @@
 #include <optional>
 
 #include "common/freshness.hpp"
-#include "common/transport.hpp"
+#include "common/transport/intake.hpp"
 #include "perception/depth/cloud.hpp"
 #include "perception/depth/depth.hpp"
 #include "ptzstereo/object_pose_t.hpp"
@@ -53,7 +53,9 @@ class DepthNode {
         estimator_(std::move(rig), DepthParams::fromParams(p)),
         cloud_maker_(CloudParams::fromParams(p)),
         target_max_age_us_(static_cast<int64_t>(p.getDouble("target_max_age_s") * 1e6)),
-        frame_freshness_(freshnessFrom(p, "frame")),
+        intake_(status_, channel(p, channels::kStereoFrame), freshnessFrom(p, "frame"),
+                {estimator_.rectifier().rig().left.width, estimator_.rectifier().rig().left.height},
+                p.getPath("rig_file")),
         pcd_path_(p.getString("pcd_path")),
         pcd_every_n_(p.getInt("pcd_every_n")),
         publish_disparity_(p.getBool("publish_disparity")),
@@ -88,41 +90,10 @@ class DepthNode {
     status_.countIn(ch_pose_, latencyMs(m.utime, wallUtime()));
   }
 
-  void drop(const std::string& reason, const std::string& message) {
-    status_.countDropped(ch_frame_, reason);
-    log_.warn(reason, "ptz-depth: dropped " + message);
-  }
-
-  bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {
-    std::string error;
-    const StereoRig& rig = estimator_.rectifier().rig();
-    if (!checkStereoFrame(m, kMaxImageSidePx, &error)) {
-      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
-      return false;
-    }
-    if (!checkFrameMatchesRig(m, rig.left.width, rig.left.height, &error)) {
-      drop("size_mismatch", "frame " + std::to_string(m.seq) + ": " + error);
-      return false;
-    }
-    if (!decodeImage(m.left, left, &error) || !decodeImage(m.right, right, &error)) {
-      drop("bad_image", "frame " + std::to_string(m.seq) + ": " + error);
-      return false;
-    }
-    return true;
-  }
-
   void onFrame(const ptzstereo::stereo_frame_t& m) {
     const int64_t received = wallUtime();
-    const bool wall_clock = captureOnWallClock(m.utime, m.publish_utime);
-    const Freshness fresh =
-        judgeFreshness(m.utime, m.publish_utime, received, frame_freshness_, wall_clock);
-    if (fresh != Freshness::kFresh) {
-      drop(freshnessReason(fresh),
-           "frame " + std::to_string(m.seq) + ": " + freshnessReason(fresh));
-      return;
-    }
     cv::Mat left, right;
-    if (!decode(m, &left, &right)) return;
+    if (!intake_.accept(m, received) || !intake_.decode(m, &left, &right)) return;
     const auto t0 = std::chrono::steady_clock::now();
     std::optional<Eigen::Vector3d> target;
     const int64_t target_age_us = saturatingDiffUs(m.utime, target_utime_);
@@ -134,7 +105,7 @@ class DepthNode {
     if (!estimator_.process(left, right, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom},
                             {m.right.pan_rad, m.right.tilt_rad, m.right.zoom}, target, &depth_,
                             &why)) {
-      drop("unknown_geometry", "frame " + std::to_string(m.seq) + ": " + why);
+      intake_.drop(m.seq, "unknown_geometry", why);
       return;
     }
     cloud_maker_.make(depth_.points_head_m, depth_.colours_bgr, &cloud_);
@@ -206,7 +177,7 @@ class DepthNode {
   CloudMaker cloud_maker_;
   ptzstereo::point_cloud_t cloud_;  // its buffers kept between frames
   int64_t target_max_age_us_;
-  FreshnessLimits frame_freshness_;
+  FrameIntake intake_;
   std::string pcd_path_;
   int pcd_every_n_;
   bool publish_disparity_;

@@ -15,7 +15,7 @@
 #include <utility>
 
 #include "common/freshness.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/jpeg_window.hpp"
 #include "perception/detect/orientation.hpp"

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <numeric>
 
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 
 namespace ptz::perception {
 

@@ -8,8 +8,8 @@
 #include <numeric>
 #include <vector>
 
-#include "common/jpeg_error.hpp"
-#include "common/message_check.hpp"
+#include "common/transport/jpeg_error.hpp"
+#include "common/transport/message_check.hpp"
 
 namespace ptz::perception {
 

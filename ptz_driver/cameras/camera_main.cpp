@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptz_driver/cameras/stereo_camera.hpp"
 #include "ptz_driver/emulators/emulated_gpio_chip.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

@@ -13,7 +13,7 @@
 
 #include "common/freshness.hpp"
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptz_driver/emulators/emulated_gpio_wiring.hpp"  // gpio_chip "sim"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "ptz_driver/heads/heads_stop.hpp"

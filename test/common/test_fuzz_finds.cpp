@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "common/config.hpp"
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 

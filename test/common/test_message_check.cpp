@@ -7,8 +7,8 @@
 
 #include <vector>
 
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"

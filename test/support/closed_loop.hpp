@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
 #include "tools/logs/run_metrics.hpp"

@@ -2,7 +2,7 @@
 // publishes it, for tests that feed a process themselves.
 #pragma once
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "sim/sim_messages.hpp"
 #include "sim/simulator.hpp"
 

@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "sim/simulator.hpp"
 
 namespace ptz::test {

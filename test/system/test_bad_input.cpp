@@ -9,7 +9,7 @@
 #include <map>
 #include <set>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"

@@ -6,7 +6,7 @@
 #include <map>
 #include <random>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "support/board_views.hpp"

@@ -8,7 +8,7 @@
 #include <memory>
 
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "control/controller/pointing.hpp"
 #include "control/stability/stability.hpp"
 #include "support/closed_loop.hpp"

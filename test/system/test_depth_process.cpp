@@ -8,7 +8,7 @@
 #include <fstream>
 #include <map>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/depth/depth.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"

@@ -13,7 +13,7 @@
 #include <map>
 #include <random>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/process_status_t.hpp"

@@ -16,7 +16,7 @@
 #include <set>
 
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/process_status_t.hpp"

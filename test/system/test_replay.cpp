@@ -9,7 +9,7 @@
 #include <map>
 #include <string>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
 #include "support/child_process.hpp"

@@ -8,7 +8,7 @@
 #include <map>
 
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"

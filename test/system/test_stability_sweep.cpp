@@ -10,7 +10,7 @@
 #include <iterator>
 #include <map>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "control/controller/pointing.hpp"
 #include "control/stability/stability.hpp"
 #include "ptzstereo/process_status_t.hpp"

@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "common/measure.hpp"
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/point_cloud_t.hpp"
 #include "tools/foxglove/foxglove_schemas.hpp"
 #include "tools/foxglove/lcm_json.hpp"

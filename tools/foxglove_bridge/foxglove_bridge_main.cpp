@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "tools/foxglove/convert.hpp"
 #include "tools/foxglove_bridge/server.hpp"
 

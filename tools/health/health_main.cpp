@@ -11,7 +11,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "tools/health/health.hpp"
 
 namespace ptz::health {

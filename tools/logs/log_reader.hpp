@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 
 namespace ptz::tools {
 

@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 
 namespace ptz::tools {
 namespace {

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 
-#include "common/message_check.hpp"
-#include "common/transport.hpp"
+#include "common/transport/message_check.hpp"
+#include "common/transport/transport.hpp"
 #include "tools/foxglove/lcm_json.hpp"
 
 namespace ptz::tools {

@@ -12,7 +12,7 @@
 #include "common/config.hpp"
 #include "common/measure.hpp"
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "tools/logs/log_reader.hpp"
 #include "tools/mcap_export/exporter.hpp"
 

@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "common/freshness.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"

@@ -3,7 +3,7 @@
 #include <stdexcept>
 
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "control/stability/stability.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "tools/report/report.hpp"
 
 namespace ptz::tools {

@@ -14,7 +14,7 @@
 #include <map>
 #include <memory>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "tools/view/viewer.hpp"

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 
 namespace {
 struct Seen {

@@ -2,7 +2,7 @@
 
 #include <fstream>
 
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 
 namespace {

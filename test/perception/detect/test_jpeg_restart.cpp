@@ -11,7 +11,7 @@
 #include <cstdlib>
 #include <random>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/detect/jpeg_window.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"

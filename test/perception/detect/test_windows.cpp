@@ -9,7 +9,7 @@
 #include <cmath>
 #include <random>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "perception/detect/detector.hpp"
 #include "perception/detect/jpeg_window.hpp"
 #include "perception/detect/stereo.hpp"

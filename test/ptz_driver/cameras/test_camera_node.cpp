@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "ptz_driver/cameras/stereo_camera.hpp"
-#include "support/fake_frame_source.hpp"
+#include "support/hardware/fake_frame_source.hpp"
 
 using namespace ptz::driver;
 using ptz::test::FakeCamera;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "ptz_driver/cameras/sources/source_supervisor.hpp"
-#include "support/fake_frame_source.hpp"
+#include "support/hardware/fake_frame_source.hpp"
 
 using ptz::driver::CapturedFrame;
 using ptz::driver::SourceSupervisor;

@@ -13,7 +13,7 @@
 #include "ptz_driver/cameras/stereo_camera.hpp"
 #include "ptz_driver/cameras/trigger.hpp"
 #include "ptz_driver/emulators/emulated_gpio_chip.hpp"
-#include "support/fake_frame_source.hpp"
+#include "support/hardware/fake_frame_source.hpp"
 
 using namespace ptz::driver;
 using ptz::test::FakeCamera;

@@ -7,7 +7,7 @@
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
 #include "support/error_of.hpp"
-#include "support/pty_pair.hpp"
+#include "support/hardware/pty_pair.hpp"
 
 using ptz::driver::Bytes;
 using ptz::driver::SerialPort;

@@ -10,7 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/point_cloud_t.hpp"

@@ -1,4 +1,4 @@
-// The GPIO head's axis logic on simulated DC motors (support/gpio_rig.hpp: 4 rad/s at full
+// The GPIO head's axis logic on simulated DC motors (support/hardware/gpio_rig.hpp: 4 rad/s at full
 // drive, 50 ms time constant, 1000 counts/rad, switches at -1.1 and 1.1 rad, soft limits +-1 rad),
 // on simulated time: homing, the position loop, limit switches, soft limits, PWM and stop.
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "support/gpio_rig.hpp"
+#include "support/hardware/gpio_rig.hpp"
 
 using ptz::PtzPose;
 using ptz::driver::GpioAxis;

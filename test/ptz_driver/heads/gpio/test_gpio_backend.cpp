@@ -13,7 +13,7 @@
 #include "ptz_driver/heads/gpio/gpio_backend.hpp"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "support/child_process.hpp"
-#include "support/gpio_rig.hpp"
+#include "support/hardware/gpio_rig.hpp"
 
 using ptz::ConfigError;
 using ptz::PtzPose;

@@ -13,9 +13,9 @@
 #include "common/plant.hpp"
 #include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
-#include "support/half_duplex_bus.hpp"
-#include "support/pty_pair.hpp"
-#include "support/serial_serve.hpp"
+#include "support/hardware/half_duplex_bus.hpp"
+#include "support/hardware/pty_pair.hpp"
+#include "support/hardware/serial_serve.hpp"
 
 using namespace ptz::driver;
 using ptz::test::PtyPair;

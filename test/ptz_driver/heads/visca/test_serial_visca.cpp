@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "support/serial_serve.hpp"
-#include "support/visca_serial_fixture.hpp"
+#include "support/hardware/serial_serve.hpp"
+#include "support/hardware/visca_serial_fixture.hpp"
 
 using namespace ptz::driver;
 using ptz::test::PtyPair;

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "support/visca_serial_fixture.hpp"
+#include "support/hardware/visca_serial_fixture.hpp"
 
 using namespace ptz::driver;
 using ptz::test::ViscaSerial;

@@ -8,7 +8,7 @@
 #include <mutex>
 #include <thread>
 
-#include "support/pty_pair.hpp"
+#include "support/hardware/pty_pair.hpp"
 
 namespace ptz::test {
 

@@ -1,4 +1,4 @@
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 
 #include <jpeglib.h>
 
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <exception>
 
-#include "common/jpeg_error.hpp"
+#include "common/transport/jpeg_error.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"

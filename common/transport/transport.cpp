@@ -1,4 +1,4 @@
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 
 #include "common/freshness.hpp"
 

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "common/config.hpp"
-#include "fuzz/fuzz_model_support.hpp"
+#include "fuzz/drivers/fuzz_model_support.hpp"
 #include "ptz_driver/heads/visca/visca_model.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "support/closed_loop.hpp"

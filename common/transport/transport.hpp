@@ -18,7 +18,7 @@
 
 #include "common/config.hpp"
 #include "common/measure.hpp"  // wallUtime, percentile (re-exported)
-#include "common/message_check.hpp"
+#include "common/transport/message_check.hpp"
 #include "common/rig.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"

@@ -12,8 +12,8 @@
 #include <map>
 #include <memory>
 
-#include "common/transport.hpp"
-#include "support/camera_recording.hpp"
+#include "common/transport/transport.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
 

@@ -17,11 +17,11 @@
 #include <map>
 #include <set>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/renderer.hpp"
-#include "support/camera_recording.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
 

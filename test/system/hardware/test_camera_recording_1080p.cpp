@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "support/camera_recording.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
 #include "support/sim_recording.hpp"

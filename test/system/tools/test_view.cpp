@@ -17,7 +17,7 @@
 #include <memory>
 #include <random>
 
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/object_tracks_t.hpp"

@@ -13,7 +13,7 @@
 #include "common/plant.hpp"
 #include "ptz_driver/emulators/visca_chain_emulator.hpp"
 #include "ptz_driver/heads/visca/visca_serial_head.hpp"
-#include "support/pty_pair.hpp"
+#include "support/hardware/pty_pair.hpp"
 
 namespace ptz::test {
 

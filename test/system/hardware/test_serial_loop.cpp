@@ -10,7 +10,7 @@
 #include <map>
 
 #include "common/plant.hpp"
-#include "common/transport.hpp"
+#include "common/transport/transport.hpp"
 #include "ptz_driver/emulators/pelco_d_bus_emulator.hpp"
 #include "ptz_driver/emulators/visca_chain_emulator.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d.hpp"
@@ -19,8 +19,8 @@
 #include "ptzstereo/ptz_state_t.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
-#include "support/pty_pair.hpp"
-#include "support/serial_serve.hpp"
+#include "support/hardware/pty_pair.hpp"
+#include "support/hardware/serial_serve.hpp"
 
 using namespace std::chrono_literals;
 using namespace ptz::driver;
