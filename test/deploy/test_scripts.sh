@@ -8,7 +8,8 @@
 #   default channels (no POINT_CLOUD, no DISPARITY_IMAGE, the 1 Hz preview kept), every frame
 #   the simulator published; at the same time a --all --split-mb 1 recording whose files are
 #   each within the limit plus one message and together hold every event (their counts per
-#   channel equal the processes' own); --private-net with a command; bad input refused.
+#   channel equal the processes' own); --private-net with a command; bad input refused;
+# - scripts/demo warns when the simulator skips frames it cannot render in time.
 #   test_scripts.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 src=$1 build=$2
@@ -184,6 +185,18 @@ expect 2 "unknown argument" --out "$work/x" --bogus
 expect 1 "already exists" --out "$work/rec" --duration 0.1
 expect 1 "no process 999999999" --out "$work/x" --net-of 999999999
 [ ! -e "$work/x" ] || bad "a refused record wrote $work/x"
+
+echo "== scripts/demo says when the simulator cannot render at --rate"
+# 1080p at 120 Hz: more than two cores render (about 22 ms a frame on both); the demo must warn
+# with the count summary.json holds, and that count must be the simulator's own.
+out=$(timeout 200 "$src/scripts/demo" --no-build --duration 4 --resolution 1080p --rate 120 \
+  --out "$work/demo" 2>&1)
+rc=$?
+[ $rc -eq 0 ] || bad "demo at 1080p/120 Hz exits $rc: $(tail -5 <<<"$out")"
+skipped=$(sed -n 's/^ *"frames_skipped_late": \([0-9]*\).*/\1/p' "$work/demo/summary.json")
+[ "${skipped:-0}" -gt 0 ] || bad "demo at 1080p/120 Hz: no frame skipped late in summary.json"
+grep -q "WARNING: ptz-sim skipped ${skipped:-x} frames late" <<<"$out" ||
+  bad "demo at 1080p/120 Hz skipped ${skipped:-?} frames without saying so: $(tail -5 <<<"$out")"
 
 [ $fail -eq 0 ] && echo "PASSED"
 exit $fail
