@@ -1,5 +1,5 @@
-// One LCM message type's checked decode (common/transport/message_check.hpp), built once per type with
-// PTZ_FUZZ_MESSAGE set to its name (fuzz/CMakeLists.txt). Properties:
+// One LCM message type's checked decode (common/transport/message_check.hpp), built once per type
+// with PTZ_FUZZ_MESSAGE set to its name (fuzz/CMakeLists.txt). Properties:
 // - checkEncoding allocates nothing worth counting, and decodeChecked agrees with it;
 // - rejected: nothing allocated beyond the input's size;
 // - accepted: lcm-gen's own decode takes exactly these bytes, the decoded message costs at most

@@ -18,8 +18,8 @@
 
 #include "common/config.hpp"
 #include "common/measure.hpp"  // wallUtime, percentile (re-exported)
-#include "common/transport/message_check.hpp"
 #include "common/rig.hpp"
+#include "common/transport/message_check.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"

@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "common/config.hpp"
-#include "common/transport/message_check.hpp"
 #include "common/rig.hpp"
+#include "common/transport/message_check.hpp"
 #include "common/transport/transport.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/process_status_t.hpp"

@@ -21,8 +21,8 @@
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "sim/renderer.hpp"
-#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/lcm_wait.hpp"
 
 using namespace std::chrono_literals;

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/lcm_wait.hpp"
 #include "support/sim_recording.hpp"
 

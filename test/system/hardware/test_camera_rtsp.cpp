@@ -13,8 +13,8 @@
 #include <memory>
 
 #include "common/transport/transport.hpp"
-#include "support/hardware/camera_recording.hpp"
 #include "support/child_process.hpp"
+#include "support/hardware/camera_recording.hpp"
 #include "support/lcm_wait.hpp"
 
 using namespace std::chrono_literals;

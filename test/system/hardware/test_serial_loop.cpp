@@ -18,9 +18,9 @@
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "support/child_process.hpp"
-#include "support/lcm_wait.hpp"
 #include "support/hardware/pty_pair.hpp"
 #include "support/hardware/serial_serve.hpp"
+#include "support/lcm_wait.hpp"
 
 using namespace std::chrono_literals;
 using namespace ptz::driver;
