@@ -125,8 +125,10 @@ ptz_build_programs() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0
   local testing=()
   [ -f "$PTZ_BUILD/CMakeCache.txt" ] || testing=(-DBUILD_TESTING=OFF)
-  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${testing[@]}" >/dev/null
-  cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)" --target "$@"
+  # Explicit returns: callers run this inside `if`, where set -e does not act.
+  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${testing[@]}" >/dev/null ||
+    return 1
+  cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)" --target "$@" || return 1
 }
 
 # ptz_install_and_build_demo: the demo's packages and programs. On a machine without PCL its
