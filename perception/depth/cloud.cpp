@@ -352,4 +352,15 @@ bool writePcd(const ptzstereo::point_cloud_t& m, const std::string& path, std::s
   return true;
 }
 
+std::string pcdPathIfDue(const std::string& pattern, int every_n, int64_t clouds_made,
+                         int64_t seq) {
+  if (pattern.empty() || clouds_made < 1) return "";
+  const bool due = every_n > 0 ? (clouds_made - 1) % every_n == 0 : clouds_made == 1;
+  if (!due) return "";
+  std::string path = pattern;
+  const auto at = path.find("{seq}");
+  if (at != std::string::npos) path.replace(at, 5, std::to_string(seq));
+  return path;
+}
+
 }  // namespace ptz::perception

@@ -81,4 +81,9 @@ std::string pclViewerCameraPath(const std::string& pcd_path);
 // upright). False with a message naming the file when either cannot be written.
 bool writePcd(const ptzstereo::point_cloud_t& cloud, const std::string& path, std::string* error);
 
+// ptz-depth's --pcd-path PATTERN for the clouds_made-th cloud (1-based) of frame seq: PATTERN
+// with {seq} replaced, when it is due (every every_n-th cloud, the first; every_n 0: the first
+// only); empty when none is.
+std::string pcdPathIfDue(const std::string& pattern, int every_n, int64_t clouds_made, int64_t seq);
+
 }  // namespace ptz::perception

@@ -455,4 +455,12 @@ size_t removeGridOutliers(const std::vector<int>& cell, int cols, const std::vec
   return dropped;
 }
 
+cv::Mat disparityGrey(const DepthFrame& frame, int num_disparities) {
+  cv::Mat grey;
+  frame.disparity_16s.convertTo(grey, CV_8U, 255.0 / (16.0 * num_disparities),
+                                -255.0 * frame.min_disparity_px / num_disparities);
+  grey.setTo(0, frame.disparity_16s < frame.min_disparity_px * 16);
+  return grey;
+}
+
 }  // namespace ptz::perception

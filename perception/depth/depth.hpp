@@ -177,6 +177,10 @@ struct DepthFrame {
   DepthStepTimes times;
 };
 
+// The disparity of a frame as grey levels over the search range (DISPARITY_IMAGE), 0 where
+// there is none.
+cv::Mat disparityGrey(const DepthFrame& frame, int num_disparities);
+
 // Rectify + match + reproject for frames of a rig; keeps its maps and matcher between frames.
 class DepthEstimator {
  public:

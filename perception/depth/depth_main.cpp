@@ -136,13 +136,9 @@ class DepthNode {
   }
 
   void publishDisparity(const ptzstereo::stereo_frame_t& m) {
-    // Grey levels over the search range, 0 where there is no disparity.
-    const int num = estimator_.params().matcher.num_disparities;
-    cv::Mat grey;
-    depth_.disparity_16s.convertTo(grey, CV_8U, 255.0 / (16.0 * num),
-                                   -255.0 * depth_.min_disparity_px / num);
-    grey.setTo(0, depth_.disparity_16s < depth_.min_disparity_px * 16);
-    ptzstereo::image_t img = encodeImage(grey, ptzstereo::image_t::ENCODING_RAW, 0);
+    ptzstereo::image_t img =
+        encodeImage(disparityGrey(depth_, estimator_.params().matcher.num_disparities),
+                    ptzstereo::image_t::ENCODING_RAW, 0);
     img.pan_rad = m.left.pan_rad;
     img.tilt_rad = m.left.tilt_rad;
     img.zoom = m.left.zoom;
@@ -150,12 +146,8 @@ class DepthNode {
   }
 
   void maybeWritePcd(const ptzstereo::point_cloud_t& cloud) {
-    if (pcd_path_.empty()) return;
-    const bool due = pcd_every_n_ > 0 ? (clouds_ - 1) % pcd_every_n_ == 0 : clouds_ == 1;
-    if (!due) return;
-    std::string path = pcd_path_;
-    const auto at = path.find("{seq}");
-    if (at != std::string::npos) path.replace(at, 5, std::to_string(cloud.frame_seq));
+    const std::string path = pcdPathIfDue(pcd_path_, pcd_every_n_, clouds_, cloud.frame_seq);
+    if (path.empty()) return;
     std::string error;
     if (writePcd(cloud, path, &error)) {
       status_.increment("pcd_written");

@@ -466,6 +466,28 @@ TEST(Cloud, PcdWrittenOrAClearError) {
   EXPECT_NE(error.find("/nonexistent-dir/cloud.pcd"), std::string::npos) << error;
 }
 
+TEST(Cloud, PcdPathDueEveryNthCloudWithItsSeq) {
+  using perception::pcdPathIfDue;
+  EXPECT_EQ(pcdPathIfDue("c{seq}.pcd", 0, 1, 42), "c42.pcd");  // 0: the first only
+  EXPECT_EQ(pcdPathIfDue("c{seq}.pcd", 0, 2, 43), "");
+  EXPECT_EQ(pcdPathIfDue("c{seq}.pcd", 30, 31, 100), "c100.pcd");  // the 1st, 31st, 61st, ...
+  EXPECT_EQ(pcdPathIfDue("c{seq}.pcd", 30, 30, 99), "");
+  EXPECT_EQ(pcdPathIfDue("scene.pcd", 30, 61, 7), "scene.pcd");
+  EXPECT_EQ(pcdPathIfDue("", 1, 1, 7), "");
+}
+
+TEST(Depth, DisparityGreySpansTheSearchRangeAndBlanksTheInvalid) {
+  perception::DepthFrame frame;
+  frame.min_disparity_px = 8;
+  // 16ths of a pixel: invalid (below the range), the range's ends and its middle.
+  frame.disparity_16s = (cv::Mat_<int16_t>(1, 4) << 7 * 16, 8 * 16, 40 * 16, 72 * 16);
+  const cv::Mat grey = perception::disparityGrey(frame, 64);
+  EXPECT_EQ(grey.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(grey.at<uint8_t>(0, 1), 0);
+  EXPECT_EQ(grey.at<uint8_t>(0, 2), 128);  // 255 * 32 / 64 = 127.5, rounded half to even
+  EXPECT_EQ(grey.at<uint8_t>(0, 3), 255);
+}
+
 // The preview that crosses a LAN: every k-th point, within its byte bound, the points unchanged.
 TEST(Cloud, APreviewKeepsEveryKthPointWithinItsBytes) {
   std::vector<cv::Point3f> points;
