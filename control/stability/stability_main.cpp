@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/config.hpp"
-#include "control/controller/smith.hpp"
+#include "control/prediction/smith.hpp"
 #include "control/stability/stability.hpp"
 #include "control/stability/track_analysis.hpp"
 
