@@ -1,5 +1,7 @@
 #include "sim/visca_server.hpp"
 
+#include <poll.h>
+
 namespace ptz::sim {
 
 ViscaServer::ViscaServer(const driver::ViscaModel& model, const std::string& host, int first_port)
@@ -40,6 +42,36 @@ bool ViscaServer::serve(const std::array<PtzPose, 2>& now, std::array<PtzPose, 2
     }
   }
   return changed;
+}
+
+ViscaCameras::ViscaCameras(const driver::ViscaModel& model, int first_port, SimRun* run)
+    : server_(model, "127.0.0.1", first_port), run_(run) {}
+
+void ViscaCameras::start() {
+  thread_ = std::thread([this] { serve(); });
+}
+
+void ViscaCameras::stop() {
+  quit_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void ViscaCameras::serve() {
+  while (!quit_) {
+    pollfd fds[2] = {{server_.fd(Side::kLeft), POLLIN, 0}, {server_.fd(Side::kRight), POLLIN, 0}};
+    if (::poll(fds, 2, 20) <= 0) continue;
+    run_->withMotorsNow([this](Simulator& sim, double t_s) {
+      const std::array<PtzPose, 2> now = {sim.plant().pose(Side::kLeft),
+                                          sim.plant().pose(Side::kRight)};
+      if (server_.serve(now, &setpoints_)) {
+        int clamped = 0, rejected = 0;
+        sim.command(t_s, setpoints_[0], setpoints_[1], &clamped, &rejected);
+        ++setpoints_applied_;
+      }
+    });
+    packets_ = server_.packets();
+    malformed_ = server_.malformed();
+  }
 }
 
 }  // namespace ptz::sim

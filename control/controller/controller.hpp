@@ -41,10 +41,10 @@
 
 #include "common/plant.hpp"
 #include "common/rig.hpp"
-#include "control/controller/kalman.hpp"
 #include "control/controller/search.hpp"
-#include "control/controller/smith.hpp"
-#include "control/controller/turn_kalman.hpp"
+#include "control/prediction/kalman.hpp"
+#include "control/prediction/smith.hpp"
+#include "control/prediction/turn_kalman.hpp"
 
 namespace ptz::control {
 

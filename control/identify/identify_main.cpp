@@ -1,30 +1,20 @@
 // ptz-identify: fits K, T and tau of one axis from an LCM log of a step test (PTZ_SETPOINT and
 // PTZ_STATE) and prints the margins the paper's loop would have with that plant. A missing,
 // empty or foreign log, or one without those channels, has its own exit code
-// (tools/logs/log_reader.hpp); a damaged log is fitted as far as it reads, with a warning.
+// (tools/logs/log_reader.hpp); a damaged log is fitted as far as it reads, with a warning. The
+// record, the fit and its report are the library's (step_test.hpp, identify.hpp).
 #include <lcm/lcm-cpp.hpp>
 
-#include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "common/config.hpp"
-#include "control/identify/identify.hpp"
-#include "control/stability/stability.hpp"
+#include "control/identify/step_test.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "tools/logs/log_reader.hpp"
-
-namespace {
-
-double pick(const ptzstereo::ptz_head_state_t& h, const std::string& what) {
-  return what == "pan" ? h.pan_rad : what == "tilt" ? h.tilt_rad : h.zoom;
-}
-double pick(const ptzstereo::ptz_head_setpoint_t& h, const std::string& what) {
-  return what == "pan" ? h.pan_rad : what == "tilt" ? h.tilt_rad : h.zoom;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz-identify",
@@ -41,11 +31,8 @@ int main(int argc, char** argv) {
   try {
     if (!p.parse(argc, argv)) return ptz::tools::log_exit::kOk;
     const std::string axis = p.getString("axis");
-    const auto sep = axis.find('_');
-    const std::string side = axis.substr(0, sep),
-                      what = sep == std::string::npos ? "" : axis.substr(sep + 1);
-    if ((side != "left" && side != "right") ||
-        (what != "pan" && what != "tilt" && what != "zoom")) {
+    const std::optional<ptz::control::AxisName> axis_name = ptz::control::parseAxisName(axis);
+    if (!axis_name) {
       throw p.invalid(
           "axis", "must be left_pan, left_tilt, left_zoom, right_pan, right_tilt or right_zoom");
     }
@@ -53,17 +40,12 @@ int main(int argc, char** argv) {
     if (path.empty()) throw ptz::ConfigError("--log FILE is required");
     ptz::tools::LogReader log(path);
     const std::string prefix = p.getString("channel_prefix");
-    ptz::control::AxisRecord record;
+    std::vector<ptzstereo::ptz_state_t> states;
     std::vector<ptzstereo::ptz_setpoint_t> setpoints;
-    bool lockstep = false;
     while (const lcm::LogEvent* ev = log.next()) {
       if (ev->channel == prefix + "PTZ_STATE") {
         ptzstereo::ptz_state_t s;
-        if (s.decode(ev->data, 0, ev->datalen) < 0) continue;
-        // Lockstep states carry sim time, far from the wall clock they were published at.
-        lockstep |= std::abs(s.publish_utime - s.utime) > 10'000'000;
-        record.positions.emplace_back(s.utime * 1e-6,
-                                      pick(side == "left" ? s.left : s.right, what));
+        if (s.decode(ev->data, 0, ev->datalen) >= 0) states.push_back(s);
       } else if (ev->channel == prefix + "PTZ_SETPOINT") {
         ptzstereo::ptz_setpoint_t s;
         if (s.decode(ev->data, 0, ev->datalen) >= 0) setpoints.push_back(s);
@@ -77,34 +59,13 @@ int main(int argc, char** argv) {
                    "read:\n%s",
                    log.describeBreaks().c_str());
     }
-    // A setpoint acts from when it was issued: in lockstep at the frame time it names, in real
-    // time when it was published.
-    for (const auto& s : setpoints) {
-      record.setpoints.emplace_back((lockstep ? s.utime : s.publish_utime) * 1e-6,
-                                    pick(side == "left" ? s.left : s.right, what));
-    }
-    const ptz::control::AxisFit fit = ptz::control::identifyAxis(record);
+    const ptz::control::StepTest test = ptz::control::stepTestOf(states, setpoints, *axis_name);
+    const ptz::control::AxisFit fit = ptz::control::identifyAxis(test.record);
     if (!fit.ok) {
       std::fprintf(stderr, "ptz-identify: %s: %s\n", path.c_str(), fit.error.c_str());
       return ptz::tools::log_exit::kVerdict;
     }
-    std::printf("%s from %zu states and %zu setpoints (%s clock):\n", axis.c_str(),
-                record.positions.size(), record.setpoints.size(),
-                lockstep ? "lockstep" : "real-time");
-    std::printf("  K = %.4f   T = %.4f s   tau = %.4f s   (rms residual %.2e)\n", fit.gain,
-                fit.time_constant_s, fit.dead_time_s, fit.rms_residual);
-    const auto m = ptz::control::continuousMargins(
-        {p.getDouble("paper_gain") * fit.gain, fit.time_constant_s, fit.dead_time_s});
-    if (m.has_crossover) {
-      std::printf(
-          "  with a P element of %g: omega_g = %.3f rad/s, phase margin %.1f deg (%.1f deg "
-          "at this tau), tau_max = %.3f s\n",
-          p.getDouble("paper_gain"), m.crossover_rad_s, m.phase_margin_deg,
-          m.phase_margin_at_delay_deg, m.tau_max_s);
-    } else {
-      std::printf("  with a P element of %g the loop gain is <= 1: stable for any delay\n",
-                  p.getDouble("paper_gain"));
-    }
+    std::fputs(ptz::control::fitReport(axis, test, fit, p.getDouble("paper_gain")).c_str(), stdout);
     return ptz::tools::log_exit::kOk;
   } catch (const ptz::ConfigError& e) {
     std::fprintf(stderr, "ptz-identify: %s\n", e.what());

@@ -9,10 +9,10 @@
 
 #include "common/plant.hpp"
 #include "control/controller/controller.hpp"
-#include "control/controller/kalman.hpp"
 #include "control/controller/pointing.hpp"
-#include "control/controller/smith.hpp"
-#include "control/controller/turn_kalman.hpp"
+#include "control/prediction/kalman.hpp"
+#include "control/prediction/smith.hpp"
+#include "control/prediction/turn_kalman.hpp"
 #include "control/stability/stability.hpp"
 #include "control/stability/track_analysis.hpp"
 #include "sim/scene.hpp"

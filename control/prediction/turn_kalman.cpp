@@ -1,6 +1,6 @@
-#include "control/controller/turn_kalman.hpp"
+#include "control/prediction/turn_kalman.hpp"
 
-#include "control/controller/kalman.hpp"
+#include "control/prediction/kalman.hpp"
 
 #include <Eigen/Cholesky>
 #include <algorithm>

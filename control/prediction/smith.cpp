@@ -1,4 +1,4 @@
-#include "control/controller/smith.hpp"
+#include "control/prediction/smith.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "control/controller/kalman.hpp"
+#include "control/prediction/kalman.hpp"
 
 #include <Eigen/Cholesky>
 
