@@ -8,7 +8,7 @@
 
 #include "common/config.hpp"
 #include "fuzz/fuzz_support.hpp"
-#include "ptz_driver/heads/zoom_table.hpp"
+#include "ptz_driver/heads/common/zoom_table.hpp"
 
 namespace ptz::fuzz {
 

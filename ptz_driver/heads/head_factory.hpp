@@ -6,8 +6,8 @@
 #include <memory>
 
 #include "common/config.hpp"
+#include "ptz_driver/heads/common/head.hpp"
 #include "ptz_driver/heads/gpio/gpio_backend.hpp"
-#include "ptz_driver/heads/head.hpp"
 
 namespace ptz::driver {
 

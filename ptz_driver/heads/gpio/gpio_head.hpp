@@ -13,8 +13,8 @@
 #include <thread>
 #include <vector>
 
+#include "ptz_driver/heads/common/head.hpp"
 #include "ptz_driver/heads/gpio/gpio_axis.hpp"
-#include "ptz_driver/heads/head.hpp"
 #include "ptz_driver/io/gpio_lines.hpp"
 
 namespace ptz::driver {

@@ -38,6 +38,7 @@ class ReplyParser {
   std::optional<Reply> next();
   int64_t badChecksums() const { return bad_checksums_; }
   int64_t skippedBytes() const { return skipped_; }
+  int64_t garbage() const { return bad_checksums_ + skipped_; }  // a serial line's malformed
 
  private:
   Bytes partial_;

@@ -21,12 +21,15 @@
 #include <optional>
 
 #include "common/plant.hpp"
-#include "ptz_driver/heads/head.hpp"
-#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/common/head.hpp"
+#include "ptz_driver/heads/common/head_book.hpp"
+#include "ptz_driver/heads/common/serial_line.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_model.hpp"
-#include "ptz_driver/heads/serial_line.hpp"
 
 namespace ptz::driver {
+
+using PelcoDLine = SerialLine<pelco_d::ReplyParser, pelco_d::Reply>;
 
 class PelcoDHead : public PtzHead {
  public:

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "common/config.hpp"
-#include "ptz_driver/heads/pan_tilt_range.hpp"
+#include "ptz_driver/heads/common/pan_tilt_range.hpp"
 
 namespace ptz::driver {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "ptz_driver/heads/zoom_table.hpp"
+#include "ptz_driver/heads/common/zoom_table.hpp"
 
 namespace ptz::driver {
 

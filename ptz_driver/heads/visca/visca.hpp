@@ -59,6 +59,7 @@ class ReplyParser {
   void feed(const uint8_t* data, size_t size);
   std::optional<Reply> next();
   int64_t malformed() const { return malformed_; }
+  int64_t garbage() const { return malformed_; }  // what a serial line counts as malformed
 
  private:
   Bytes partial_;

@@ -7,7 +7,7 @@
 #include <functional>
 #include <optional>
 
-#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/common/head_book.hpp"
 #include "ptz_driver/heads/visca/visca_model.hpp"
 
 namespace ptz::driver {

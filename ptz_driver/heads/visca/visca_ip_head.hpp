@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/common/head.hpp"
 #include "ptz_driver/heads/visca/visca_head_core.hpp"
 #include "ptz_driver/io/udp.hpp"
 

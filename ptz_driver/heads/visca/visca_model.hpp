@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "ptz_driver/heads/common/zoom_table.hpp"
 #include "ptz_driver/heads/visca/visca.hpp"
-#include "ptz_driver/heads/zoom_table.hpp"
 
 namespace ptz::driver {
 

@@ -19,11 +19,14 @@
 #include <memory>
 #include <optional>
 
-#include "ptz_driver/heads/head.hpp"
-#include "ptz_driver/heads/serial_line.hpp"
+#include "ptz_driver/heads/common/head.hpp"
+#include "ptz_driver/heads/common/serial_line.hpp"
+#include "ptz_driver/heads/visca/visca.hpp"
 #include "ptz_driver/heads/visca/visca_head_core.hpp"
 
 namespace ptz::driver {
+
+using ViscaSerialLine = SerialLine<visca::ReplyParser, visca::Reply>;
 
 class ViscaSerialHead : public PtzHead {
  public:

@@ -1,9 +1,13 @@
 // The live source's view selection, fed with simulator frames as ptz-calibrate --source lcm feeds
-// it with decoded STEREO_FRAMEs.
+// it with decoded STEREO_FRAMEs; the frames it takes (at home) and what it does with a kept view.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
 #include <random>
 
+#include "perception/calibrate/calibrate_tool.hpp"
 #include "perception/calibrate/calibration_live.hpp"
 #include "support/board_views.hpp"
 
@@ -78,6 +82,58 @@ TEST(LiveCollector, KeepsOnlyViewsThatAddCoverageAndCalibratesFromThem) {
   const auto c =
       ptz::perception::calibrateStereo(collector.views(), board, collector.imageSize(), {});
   EXPECT_LT(std::abs(c.toRig().baselineM() - truth.baselineM()) / truth.baselineM(), 0.005);
+}
+
+// ptz-calibrate --source lcm's frame handling (LiveViews): frames off home are refused with the
+// reason, a kept view is saved and printed, the target ends the run.
+TEST(LiveViews, TakesFramesAtHomeAndSavesKeptViews) {
+  char dir_template[] = "/tmp/ptz_calibrate_live_XXXXXX";
+  const std::string dir = ::mkdtemp(dir_template);
+  ptz::Params p("ptz-calibrate", "test");
+  ptz::perception::declareCalibrateParams(p);
+  const std::string save = "--save-views-dir=" + dir;
+  std::vector<std::string> args = {"ptz-calibrate",
+                                   "--board-cols=9",
+                                   "--board-rows=6",
+                                   "--square-m=0.05",
+                                   "--target-views=1",
+                                   "--zoom=2",
+                                   save};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  ASSERT_TRUE(p.parse(static_cast<int>(argv.size()), argv.data()));
+  ptz::perception::LiveViews live(p);
+
+  ptzstereo::stereo_frame_t m{};
+  m.left.zoom = m.right.zoom = 2.0;
+  EXPECT_EQ(live.notAtHome(m), "");
+  m.right.tilt_rad = 0.0019;  // within home_tolerance_rad 0.002
+  EXPECT_EQ(live.notAtHome(m), "");
+  m.left.pan_rad = 0.003;
+  EXPECT_EQ(live.notAtHome(m),
+            "cameras not at pan = tilt = 0 and zoom 2.000000 (home_tolerance_rad, --zoom)");
+  m.left.pan_rad = 0;
+  m.right.zoom = 1.0;
+  EXPECT_NE(live.notAtHome(m), "");
+
+  std::mt19937 rng(7);
+  const ptz::StereoRig truth = ptz::test::randomRig(rng);
+  ptz::test::BoardScene sim;
+  const std::vector<ptz::CameraView> views = {truth.view(ptz::Side::kLeft, {}),
+                                              truth.view(ptz::Side::kRight, {})};
+  sim.chessboard().centre_head_m = {0, 0, -2};  // behind the cameras
+  EXPECT_EQ(live.offer(sim.render(views[0]), sim.render(views[1]), 41),
+            LiveCollector::Result::kNoBoard);
+  EXPECT_FALSE(live.done());
+  ASSERT_TRUE(
+      ptz::test::placeBoard(rng, views, {0, 0, 1.3}, {0.2, 0.1, 0.2}, 0.5, &sim.chessboard()));
+  EXPECT_EQ(live.offer(sim.render(views[0]), sim.render(views[1]), 42),
+            LiveCollector::Result::kKept);
+  EXPECT_TRUE(live.done());
+  EXPECT_EQ(live.collector().views().at(0).left_name.rfind("frame 42", 0), 0u);
+  EXPECT_TRUE(std::filesystem::exists(dir + "/left001.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir + "/right001.png"));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "ptz_driver/heads/heads_stop.hpp"
+#include "ptz_driver/heads/common/heads_stop.hpp"
 
 using namespace ptz::driver;
 

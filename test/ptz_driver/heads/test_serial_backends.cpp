@@ -3,9 +3,9 @@
 #include <gtest/gtest.h>
 
 #include "common/plant.hpp"
-#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/common/head_book.hpp"
 #include "ptz_driver/heads/head_factory.hpp"
-#include "ptz_driver/heads/serial_line.hpp"
+#include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
 #include "support/error_of.hpp"

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "common/plant.hpp"
-#include "ptz_driver/heads/slewed_command.hpp"
+#include "ptz_driver/heads/common/slewed_command.hpp"
 
 using ptz::PtzPose;
 using ptz::driver::SlewedCommand;

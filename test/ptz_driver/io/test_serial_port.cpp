@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "common/config.hpp"
-#include "ptz_driver/heads/head_book.hpp"  // waitUntil
+#include "ptz_driver/heads/common/head_book.hpp"  // waitUntil
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
 #include "support/error_of.hpp"

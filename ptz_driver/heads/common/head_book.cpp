@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/head_book.hpp"
+#include "ptz_driver/heads/common/head_book.hpp"
 
 #include <poll.h>
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/slewed_command.hpp"
+#include "ptz_driver/heads/common/slewed_command.hpp"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/heads_stop.hpp"
+#include "ptz_driver/heads/common/heads_stop.hpp"
 
 #include <utility>
 

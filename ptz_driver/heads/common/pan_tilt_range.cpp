@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/pan_tilt_range.hpp"
+#include "ptz_driver/heads/common/pan_tilt_range.hpp"
 
 #include <cmath>
 

@@ -11,7 +11,7 @@
 #include <optional>
 #include <string>
 
-#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/common/head.hpp"
 
 namespace ptz::driver {
 

@@ -5,6 +5,9 @@
 // same device path opened again with back-off (0.5 s doubling to 8 s), so a driver that runs
 // for hours recovers when the adapter comes back. A reopened line starts over: nothing
 // pending, nothing started (reopens() tells the heads to forget theirs too).
+// No protocol here: Parser is the protocol's reply parser (feed(data, size); next() ->
+// optional<Reply> with an `address`; garbage(): bad bytes and packets so far), Reply its reply;
+// each protocol folder names its line (ViscaSerialLine, PelcoDLine).
 #pragma once
 
 #include <algorithm>
@@ -18,21 +21,11 @@
 #include <utility>
 #include <vector>
 
-#include "ptz_driver/heads/head_book.hpp"
-#include "ptz_driver/heads/pelco_d/pelco_d.hpp"
-#include "ptz_driver/heads/visca/visca.hpp"
+#include "ptz_driver/heads/common/head_book.hpp"
 #include "ptz_driver/io/backoff.hpp"
 #include "ptz_driver/io/serial_port.hpp"
 
 namespace ptz::driver {
-
-// What each parser counts as garbage (bad packets, skipped bytes, bad checksums).
-inline int64_t garbageOf(const visca::ReplyParser& p) {
-  return p.malformed();
-}
-inline int64_t garbageOf(const pelco_d::ReplyParser& p) {
-  return p.badChecksums() + p.skippedBytes();
-}
 
 template <class Parser, class Reply>
 class SerialLine {
@@ -105,7 +98,7 @@ class SerialLine {
       const auto it = inbox_.find(r->address);
       (it == inbox_.end() ? unrouted_ : it->second).push_back(std::move(*r));
     }
-    const int64_t garbage = garbageOf(parser_);
+    const int64_t garbage = parser_.garbage();
     book->stats().malformed += garbage - std::exchange(garbage_counted_, garbage);
   }
   std::optional<Reply> next(int address) { return pop(&inbox_[address]); }
@@ -179,8 +172,5 @@ class SerialLine {
   int last_talker_ = -1;
   std::string error_;  // of a write
 };
-
-using ViscaSerialLine = SerialLine<visca::ReplyParser, visca::Reply>;
-using PelcoDLine = SerialLine<pelco_d::ReplyParser, pelco_d::Reply>;
 
 }  // namespace ptz::driver

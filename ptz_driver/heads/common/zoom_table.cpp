@@ -1,4 +1,4 @@
-#include "ptz_driver/heads/zoom_table.hpp"
+#include "ptz_driver/heads/common/zoom_table.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 #include <functional>
 #include <vector>
 
-#include "ptz_driver/heads/head.hpp"
+#include "ptz_driver/heads/common/head.hpp"
 
 namespace ptz::driver {
 
