@@ -66,9 +66,6 @@ PTZ_PACKAGES=(
   nftables xvfb x11-apps imagemagick xdotool
 )
 
-# The programs scripts/demo runs (it builds only these).
-PTZ_DEMO_PROGRAMS=(ptz-sim ptz-detect ptz-control ptz-depth ptz-wait-for ptz-log-summary ptz-report)
-
 ptz_sudo() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
 }
@@ -135,7 +132,7 @@ ptz_build_programs() {
 # ~430 packages install while everything but ptz-depth builds (a first demo a minute sooner).
 ptz_install_and_build_demo() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0
-  local pcl=libpcl-dev pcl_log pcl_pid others=() programs=()
+  local pcl=libpcl-dev pcl_log pcl_pid others=()
   if dpkg-query -W -f='${Status}' "$pcl" 2>/dev/null | grep -q "install ok installed"; then
     ptz_install_packages "${PTZ_DEMO_PACKAGES[@]}"
   else
@@ -145,8 +142,8 @@ ptz_install_and_build_demo() {
     echo "Installing $pcl (log: $pcl_log) while the other programs build ..."
     ptz_install_packages "$pcl" >"$pcl_log" 2>&1 &
     pcl_pid=$!
-    for p in "${PTZ_DEMO_PROGRAMS[@]}"; do [ "$p" = ptz-depth ] || programs+=("$p"); done
-    if ! ptz_build_programs "${programs[@]}"; then
+    # Without PCL the target leaves ptz-depth out (the top CMakeLists.txt).
+    if ! ptz_build_programs ptz_demo_programs; then
       wait "$pcl_pid" || true
       return 1
     fi
@@ -158,7 +155,7 @@ ptz_install_and_build_demo() {
     rm -f "$pcl_log"
   fi
   echo "Building the demo's programs in $PTZ_BUILD ..."
-  ptz_build_programs "${PTZ_DEMO_PROGRAMS[@]}"
+  ptz_build_programs ptz_demo_programs
 }
 
 # Build jobs: one a core (PTZ_JOBS overrides).
