@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/transport/channel_regex.hpp"
 #include "common/transport/transport.hpp"
 #include "tools/foxglove/convert.hpp"
 #include "tools/foxglove_bridge/server.hpp"
@@ -42,16 +43,6 @@ void declare(Params& p) {
         Range::between(64, 1048576));
 }
 
-// Regex-safe: LCM subscribes by regular expression.
-std::string escapeRegex(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos) out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 // Every channel under the prefix, raw bytes, the newest of each kept until delivered.
 class NewestPerChannel : public PendingDelivery {
  public:
@@ -65,7 +56,7 @@ class NewestPerChannel : public PendingDelivery {
   NewestPerChannel(lcm::LCM& lcm, const std::string& prefix, StatusReporter& status,
                    Handler handler)
       : lcm_(&lcm), prefix_(prefix), status_(status), handler_(std::move(handler)) {
-    subscription_ = lcm.subscribeFunction(escapeRegex(prefix) + ".*", &dispatch, this);
+    subscription_ = lcm.subscribeFunction(channelsStartingWith(prefix), &dispatch, this);
     registerPending(lcm_, this);
   }
   ~NewestPerChannel() override {

@@ -11,6 +11,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "common/transport/channel_regex.hpp"
 #include "common/transport/transport.hpp"
 #include "tools/health/health.hpp"
 
@@ -52,16 +53,6 @@ std::string verdicts(const std::vector<ProcessReport>& reports) {
   return v;
 }
 
-// Regex-safe: LCM subscribes by regular expression.
-std::string escapeRegex(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos) out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 class HealthNode {
  public:
   HealthNode(const Params& p, lcm::LCM* lcm, Options options)
@@ -74,7 +65,7 @@ class HealthNode {
         listen_s_(p.getDouble("listen_s")),
         grace_s_(p.getDouble("grace_s")),
         changes_only_(p.getBool("changes_only")) {
-    const std::string pattern = escapeRegex(channel(p, channels::kProcessStatusPrefix)) + ".*";
+    const std::string pattern = channelsStartingWith(channel(p, channels::kProcessStatusPrefix));
     statuses_ = std::make_unique<SafeSubscription<ptzstereo::process_status_t>>(
         *lcm_, pattern, status_,
         [this](const std::string&, const ptzstereo::process_status_t& m) { onStatus(m); });
