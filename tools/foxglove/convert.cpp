@@ -98,7 +98,7 @@ struct Converter::Impl {
   RateSchedule image_schedule, preview_schedule, cloud_schedule;
   // seq -> output width / frame width of the images converted, per side.
   std::deque<std::pair<int64_t, std::array<double, 2>>> shown;
-  std::map<std::string, int64_t> dropped, converted, ignored;
+  std::map<std::string, int64_t> dropped, converted, ignored, decoded;
 
   Impl(StereoRig r, ConvertOptions o)
       : rig(std::move(r)),
@@ -162,7 +162,10 @@ struct Converter::Impl {
   template <class Msg>
   bool decode(const std::string& channel, const void* data, size_t size, Msg* msg) {
     std::string why;
-    if (decodeChecked(data, size, msg, &why)) return true;
+    if (decodeChecked(data, size, msg, &why)) {
+      countIn(&decoded, printable(channel, 80));
+      return true;
+    }
     countDrop(channel, "undecodable");
     return false;
   }
@@ -504,6 +507,27 @@ const std::map<std::string, int64_t>& Converter::converted() const {
 }
 const std::map<std::string, int64_t>& Converter::ignored() const {
   return impl_->ignored;
+}
+const std::map<std::string, int64_t>& Converter::decoded() const {
+  return impl_->decoded;
+}
+
+std::vector<Message> Converter::convertFrame(const std::string& prefixed,
+                                             const ptzstereo::stereo_frame_t& m,
+                                             int64_t receive_utime) {
+  Impl& d = *impl_;
+  std::vector<Message> out;
+  const std::string& prefix = d.options.channel_prefix;
+  const bool ours = prefixed.compare(0, prefix.size(), prefix) == 0;
+  const std::string channel = ours ? prefixed.substr(prefix.size()) : prefixed;
+  const bool preview = channel == channels::kStereoPreview;
+  if (!ours || (channel != channels::kStereoFrame && !preview)) {
+    Impl::countIn(&d.ignored, printable(prefixed, 80));
+    return out;
+  }
+  d.frame(channel, m, receive_utime, preview, &out);
+  if (!out.empty()) Impl::countIn(&d.converted, printable(channel, 80));
+  return out;
 }
 
 std::vector<Message> Converter::convert(const std::string& prefixed, const void* data, size_t size,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
 
 namespace ptz::foxglove {
 
@@ -64,11 +65,18 @@ class Converter {
   std::vector<Message> convert(const std::string& channel, const void* data, size_t size,
                                int64_t receive_utime);
 
+  // A STEREO_FRAME or STEREO_PREVIEW its caller has decoded already (it needs it too): what
+  // convert() makes of its bytes, without a second decode.
+  std::vector<Message> convertFrame(const std::string& channel, const ptzstereo::stereo_frame_t& m,
+                                    int64_t receive_utime);
+
   // Dropped messages: "CHANNEL: reason" -> count.
   const std::map<std::string, int64_t>& dropped() const;
   // Messages converted per LCM channel, and LCM channels seen but not shown.
   const std::map<std::string, int64_t>& converted() const;
   const std::map<std::string, int64_t>& ignored() const;
+  // LCM messages decoded per channel (without the prefix).
+  const std::map<std::string, int64_t>& decoded() const;
 
  private:
   struct Impl;
