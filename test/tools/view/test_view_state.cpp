@@ -28,7 +28,7 @@ ptzstereo::object_pose_t pose(int64_t seq) {
 
 }  // namespace
 
-TEST(ViewState, AFrameIsReadyOnceItsDetectionsAndPoseAreInOrAfterMaxWait) {
+TEST(ViewKeeping, AFrameIsReadyOnceItsDetectionsAndPoseAreInOrAfterMaxWait) {
   ViewState state(200'000);
   state.onFrame(frame(5), 1'000'000, false);
   EXPECT_EQ(state.ready(1'000'000), nullptr);
@@ -55,7 +55,7 @@ TEST(ViewState, AFrameIsReadyOnceItsDetectionsAndPoseAreInOrAfterMaxWait) {
   EXPECT_EQ(state.framesNotDrawn(), 0);
 }
 
-TEST(ViewState, ANewerFrameReplacesAWaitingOneAndPausedFramesAreNotKept) {
+TEST(ViewKeeping, ANewerFrameReplacesAWaitingOneAndPausedFramesAreNotKept) {
   ViewState state(200'000);
   state.onFrame(frame(1), 0, false);
   state.onFrame(frame(2), 10'000, false);
@@ -69,7 +69,7 @@ TEST(ViewState, ANewerFrameReplacesAWaitingOneAndPausedFramesAreNotKept) {
   EXPECT_EQ(state.keptForFrames(), 0u);  // frame 3's detections forgotten with it
 }
 
-TEST(ViewState, BogusFrameSeqsCannotGrowWhatIsKept) {
+TEST(ViewKeeping, BogusFrameSeqsCannotGrowWhatIsKept) {
   ViewState state(200'000);
   state.onFrame(frame(100), 0, false);
   for (int64_t i = 0; i < 1000; ++i) state.onDetections(detections(i * 7919 - 3'000'000));
