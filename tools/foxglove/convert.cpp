@@ -98,7 +98,11 @@ struct Converter::Impl {
   RateSchedule image_schedule, preview_schedule, cloud_schedule;
   // seq -> output width / frame width of the images converted, per side.
   std::deque<std::pair<int64_t, std::array<double, 2>>> shown;
-  std::map<std::string, int64_t> dropped, converted, ignored;
+  std::map<std::string, int64_t> dropped, converted, ignored, decoded;
+  // The topics each channel (without the prefix) makes; status channels make their own.
+  std::map<std::string, std::vector<std::string>> channel_topics;
+  const TopicFilter* wanted = nullptr;  // during convert(); null: every topic
+  int64_t images_converted = 0, not_wanted = 0;
 
   Impl(StereoRig r, ConvertOptions o)
       : rig(std::move(r)),
@@ -135,6 +139,34 @@ struct Converter::Impl {
     truth.objects.resize(1);
     addOwn("/sim_truth", "ptzstereo.sim_truth_t", toJson(truth));
     addOwn("/target_select", "ptzstereo.target_select_t", toJson(ptzstereo::target_select_t{}));
+    namespace ch = channels;
+    for (const char* frames : {ch::kStereoFrame, ch::kStereoPreview}) {
+      const std::string p = frames == ch::kStereoFrame ? "/" : "/preview/";
+      channel_topics[frames] = {"/tf", p + "left/image", p + "left/camera_info", p + "right/image",
+                                p + "right/camera_info"};
+    }
+    channel_topics[ch::kPtzState] = {"/ptz_state", "/tf"};
+    channel_topics[ch::kPtzSetpoint] = {"/ptz_setpoint"};
+    channel_topics[ch::kControlState] = {"/control_state"};
+    channel_topics[ch::kObjectDetections] = {"/object_detections", "/left/detections",
+                                             "/right/detections"};
+    channel_topics[ch::kObjectPose] = {"/object_pose"};
+    channel_topics[ch::kObjectTracks] = {"/object_tracks", "/objects"};
+    channel_topics[ch::kSimTruth] = {"/sim_truth", "/truth"};
+    channel_topics[ch::kTargetSelect] = {"/target_select"};
+    channel_topics[ch::kPointCloud] = {"/cloud"};
+    channel_topics[ch::kPointCloudPreview] = {"/cloud_preview"};
+  }
+
+  bool want(const std::string& topic_name) const {
+    return !wanted || !*wanted || (*wanted)(topic(topic_name));
+  }
+  // Whether any topic the channel makes is wanted (a channel not listed: yes).
+  bool wantAny(const std::string& channel) const {
+    const auto it = channel_topics.find(channel);
+    if (it == channel_topics.end()) return true;
+    return std::any_of(it->second.begin(), it->second.end(),
+                       [this](const std::string& t) { return want(t); });
   }
 
   int addTopic(const std::string& name, const std::string& schema_name, const json& schema) {
@@ -162,7 +194,10 @@ struct Converter::Impl {
   template <class Msg>
   bool decode(const std::string& channel, const void* data, size_t size, Msg* msg) {
     std::string why;
-    if (decodeChecked(data, size, msg, &why)) return true;
+    if (decodeChecked(data, size, msg, &why)) {
+      countIn(&decoded, printable(channel, 80));
+      return true;
+    }
     countDrop(channel, "undecodable");
     return false;
   }
@@ -257,12 +292,19 @@ struct Converter::Impl {
     }
     const double pan_tilt[2][2] = {{m.left.pan_rad, m.left.tilt_rad},
                                    {m.right.pan_rad, m.right.tilt_rad}};
-    out->push_back(message("/tf", receive_utime, m.utime, transforms(m.utime, pan_tilt)));
+    if (want("/tf")) {
+      out->push_back(message("/tf", receive_utime, m.utime, transforms(m.utime, pan_tilt)));
+    }
+    const std::string prefix = preview ? "/preview/" : "/";
+    const auto wantSide = [&](int i) {
+      return want(prefix + kSides[i] + "/image") || want(prefix + kSides[i] + "/camera_info");
+    };
+    if (!wantSide(0) && !wantSide(1)) return;  // no image decoded, scaled or encoded
     RateSchedule& schedule = preview ? preview_schedule : image_schedule;
     if (schedule.enabled() && !schedule.take(m.utime)) return;
-    const std::string prefix = preview ? "/preview/" : "/";
     std::array<double, 2> scales{1, 1};
     for (int i = 0; i < 2; ++i) {
+      if (!wantSide(i)) continue;
       const Side side = static_cast<Side>(i);
       const ptzstereo::image_t& image = i == 0 ? m.left : m.right;
       std::vector<uint8_t> encoded;
@@ -276,11 +318,16 @@ struct Converter::Impl {
       const json others = {{"timestamp", stamp(m.utime)},
                            {"frame_id", std::string(kSides[i]) + "_camera"},
                            {"format", "jpeg"}};
-      out->push_back(textMessage(s + "/image", receive_utime, m.utime,
-                                 dumpWithBase64Data(others, jpeg->data(), jpeg->size())));
+      if (want(s + "/image")) {
+        out->push_back(textMessage(s + "/image", receive_utime, m.utime,
+                                   dumpWithBase64Data(others, jpeg->data(), jpeg->size())));
+        ++images_converted;
+      }
       // A preview is smaller than the rig's images: its calibration is scaled to it.
-      out->push_back(message(s + "/camera_info", receive_utime, m.utime,
-                             calibration(side, m.utime, image.zoom, width, height)));
+      if (want(s + "/camera_info")) {
+        out->push_back(message(s + "/camera_info", receive_utime, m.utime,
+                               calibration(side, m.utime, image.zoom, width, height)));
+      }
     }
     if (!preview) {
       // Detections are in the frame's pixels; they are drawn on the image as converted.
@@ -505,9 +552,50 @@ const std::map<std::string, int64_t>& Converter::converted() const {
 const std::map<std::string, int64_t>& Converter::ignored() const {
   return impl_->ignored;
 }
+int64_t Converter::imagesConverted() const {
+  return impl_->images_converted;
+}
+int64_t Converter::notWanted() const {
+  return impl_->not_wanted;
+}
+const std::map<std::string, int64_t>& Converter::decoded() const {
+  return impl_->decoded;
+}
+
+std::vector<Message> Converter::convertFrame(const std::string& prefixed,
+                                             const ptzstereo::stereo_frame_t& m,
+                                             int64_t receive_utime) {
+  Impl& d = *impl_;
+  std::vector<Message> out;
+  const std::string& prefix = d.options.channel_prefix;
+  const bool ours = prefixed.compare(0, prefix.size(), prefix) == 0;
+  const std::string channel = ours ? prefixed.substr(prefix.size()) : prefixed;
+  const bool preview = channel == channels::kStereoPreview;
+  if (!ours || (channel != channels::kStereoFrame && !preview)) {
+    Impl::countIn(&d.ignored, printable(prefixed, 80));
+    return out;
+  }
+  d.frame(channel, m, receive_utime, preview, &out);
+  if (!out.empty()) Impl::countIn(&d.converted, printable(channel, 80));
+  return out;
+}
 
 std::vector<Message> Converter::convert(const std::string& prefixed, const void* data, size_t size,
-                                        int64_t receive_utime) {
+                                        int64_t receive_utime, const TopicFilter& wanted) {
+  Impl& d = *impl_;
+  d.wanted = &wanted;
+  auto out = convertWanted(prefixed, data, size, receive_utime);
+  d.wanted = nullptr;
+  if (wanted) {
+    out.erase(std::remove_if(out.begin(), out.end(),
+                             [&wanted](const Message& m) { return !wanted(m.topic); }),
+              out.end());
+  }
+  return out;
+}
+
+std::vector<Message> Converter::convertWanted(const std::string& prefixed, const void* data,
+                                              size_t size, int64_t receive_utime) {
   namespace ch = channels;
   Impl& d = *impl_;
   std::vector<Message> out;
@@ -517,6 +605,10 @@ std::vector<Message> Converter::convert(const std::string& prefixed, const void*
     return out;
   }
   const std::string channel = prefixed.substr(prefix.size());
+  if (!d.wantAny(channel)) {
+    ++d.not_wanted;
+    return out;
+  }
   // Decodes *m and converts it field for field to topic; false when it does not decode.
   const auto decodeRaw = [&](auto* m, const char* topic) {
     if (!d.decode(channel, data, size, m)) return false;

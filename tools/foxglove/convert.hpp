@@ -6,12 +6,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "common/rig.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
 
 namespace ptz::foxglove {
 
@@ -47,6 +49,9 @@ struct ConvertOptions {
 // too large ones as INT64_MAX.
 int64_t utimeToNs(int64_t utime);
 
+// Whether anyone wants a topic (an index into Converter::topics()).
+using TopicFilter = std::function<bool(int topic)>;
+
 class Converter {
  public:
   Converter(StereoRig rig, ConvertOptions options);
@@ -61,16 +66,31 @@ class Converter {
   // One LCM message, checked against its bytes before it is decoded. Returns what it converts
   // to (often several messages, sometimes none: a channel not shown, a decimated image). A
   // message that fails its check is counted in dropped() by channel and reason.
+  // With wanted, only the topics it wants are made, and a message none of whose topics it wants
+  // is not even decoded (counted in notWanted()); /status/ topics are added all the same.
   std::vector<Message> convert(const std::string& channel, const void* data, size_t size,
-                               int64_t receive_utime);
+                               int64_t receive_utime, const TopicFilter& wanted = {});
+
+  // A STEREO_FRAME or STEREO_PREVIEW its caller has decoded already (it needs it too): what
+  // convert() makes of its bytes, without a second decode.
+  std::vector<Message> convertFrame(const std::string& channel, const ptzstereo::stereo_frame_t& m,
+                                    int64_t receive_utime);
 
   // Dropped messages: "CHANNEL: reason" -> count.
   const std::map<std::string, int64_t>& dropped() const;
   // Messages converted per LCM channel, and LCM channels seen but not shown.
   const std::map<std::string, int64_t>& converted() const;
   const std::map<std::string, int64_t>& ignored() const;
+  // Image messages made (the costly part: a JPEG, base64); messages none of whose topics was
+  // wanted.
+  int64_t imagesConverted() const;
+  int64_t notWanted() const;
+  // LCM messages decoded per channel (without the prefix).
+  const std::map<std::string, int64_t>& decoded() const;
 
  private:
+  std::vector<Message> convertWanted(const std::string& channel, const void* data, size_t size,
+                                     int64_t receive_utime);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

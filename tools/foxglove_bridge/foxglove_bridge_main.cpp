@@ -1,8 +1,9 @@
 // ptz-foxglove-bridge: every LCM channel of the run, converted by ptz::foxglove::Converter (the
 // same topics as ptz-mcap's files), served live over the Foxglove WebSocket protocol. It only
 // listens: each channel keeps its newest message until the loop hands it over (a queue of one per
-// channel), so it never works through a backlog nor slows anyone; with no client connected it
-// only counts. The server's thread sends; slow clients lose messages, never delay the loop.
+// channel), so it never works through a backlog nor slows anyone; a message no connected client
+// subscribes to (bridge.hpp) is only counted. The server's thread sends; slow clients lose
+// messages, never delay the loop.
 #include <algorithm>
 #include <cstdio>
 #include <functional>
@@ -12,9 +13,10 @@
 #include <utility>
 #include <vector>
 
+#include "common/transport/channel_regex.hpp"
 #include "common/transport/transport.hpp"
 #include "tools/foxglove/convert.hpp"
-#include "tools/foxglove_bridge/server.hpp"
+#include "tools/foxglove_bridge/bridge.hpp"
 
 namespace ptz::foxglove_bridge {
 namespace {
@@ -42,16 +44,6 @@ void declare(Params& p) {
         Range::between(64, 1048576));
 }
 
-// Regex-safe: LCM subscribes by regular expression.
-std::string escapeRegex(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos) out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 // Every channel under the prefix, raw bytes, the newest of each kept until delivered.
 class NewestPerChannel : public PendingDelivery {
  public:
@@ -65,7 +57,7 @@ class NewestPerChannel : public PendingDelivery {
   NewestPerChannel(lcm::LCM& lcm, const std::string& prefix, StatusReporter& status,
                    Handler handler)
       : lcm_(&lcm), prefix_(prefix), status_(status), handler_(std::move(handler)) {
-    subscription_ = lcm.subscribeFunction(escapeRegex(prefix) + ".*", &dispatch, this);
+    subscription_ = lcm.subscribeFunction(channelsStartingWith(prefix), &dispatch, this);
     registerPending(lcm_, this);
   }
   ~NewestPerChannel() override {
@@ -141,8 +133,8 @@ class BridgeNode {
         status_(lcm, p, "ptz-foxglove-bridge"),
         prefix_(p.getString("channel_prefix")),
         address_(p.getString("address")),
-        converter_(std::move(rig), convertOptions(p)),
-        server_(serverOptions(p)) {}
+        server_(serverOptions(p)),
+        bridge_(server_, std::move(rig), convertOptions(p), prefix_) {}
 
   int run() {
     try {
@@ -157,10 +149,10 @@ class BridgeNode {
                  "ptz-foxglove-bridge: serving ws://%s:%u (Foxglove: Open connection, "
                  "Foxglove WebSocket)\n",
                  address_.c_str(), server_.port());
-    advertiseNewTopics();
     input_ = std::make_unique<NewestPerChannel>(
-        *lcm_, prefix_, status_,
-        [this](const std::string& ch, const NewestPerChannel::Pending& m) { onMessage(ch, m); });
+        *lcm_, prefix_, status_, [this](const std::string& ch, const NewestPerChannel::Pending& m) {
+          bridge_.onMessage(ch, m.bytes.data(), m.bytes.size(), m.receive_utime);
+        });
     status_.publishNow();  // up and subscribed
     while (!StopFlag::stopRequested()) {
       handleNewest(*lcm_, 100);
@@ -175,76 +167,15 @@ class BridgeNode {
   }
 
  private:
-  void onMessage(const std::string& channel, const NewestPerChannel::Pending& m) {
-    if (!server_.hasClients()) {
-      status_.increment("messages_not_converted_no_client");
-      return;
-    }
-    // The converter knows the contract's names; the prefix only selects this rig's channels.
-    const std::string name = channel.substr(prefix_.size());
-    auto out = converter_.convert(name, m.bytes.data(), m.bytes.size(), m.receive_utime);
-    advertiseNewTopics();
-    for (auto& msg : out) {
-      if (msg.topic < 0 || static_cast<size_t>(msg.topic) >= channel_ids_.size()) continue;
-      // Moved: an image's JSON is its JPEG in base64, not copied once more.
-      server_.publish(channel_ids_[static_cast<size_t>(msg.topic)],
-                      static_cast<uint64_t>(std::max<int64_t>(msg.log_time_ns, 0)),
-                      std::move(msg.json));
-    }
-    status_.increment("messages_converted", static_cast<int64_t>(out.size()));
-  }
-
-  // Topics the converter added (a process's first status) are advertised as they appear.
-  void advertiseNewTopics() {
-    const auto& topics = converter_.topics();
-    while (channel_ids_.size() < topics.size()) {
-      const auto& t = topics[channel_ids_.size()];
-      channel_ids_.push_back(server_.addChannel(t.name, "json", t.schema_name, t.schema_json));
-    }
-  }
-
   void updateCounters() {
-    const ServerStats s = server_.stats();
-    status_.setCounter("clients", s.clients);
-    status_.setCounter("clients_connected", s.clients_connected);
-    status_.setCounter("clients_refused", s.clients_refused);
-    status_.setCounter("clients_closed_too_large", s.clients_closed_too_large);
-    status_.setCounter("handshakes_failed", s.handshakes_failed);
-    status_.setCounter("subscriptions", s.subscriptions);
-    status_.setCounter("messages_sent", s.messages_sent);
-    status_.setCounter("bytes_sent", s.bytes_sent);
-    status_.setCounter("messages_replaced", s.messages_replaced);
-    status_.setCounter("messages_dropped_slow_client", s.messages_dropped_slow_client);
-    status_.setCounter("slow_client_waits", s.slow_client_waits);
-    status_.setCounter("send_errors", s.send_errors);
-    status_.setCounter("client_statuses_sent", s.statuses_sent);
-    status_.setCounter("client_statuses_dropped", s.statuses_dropped);
-    status_.setCounter("client_errors", s.client_errors);
-    for (const auto& [reason, n] : s.client_errors_by_reason) {
-      status_.setCounter("client_errors_" + reason, n);
+    for (const auto& [name, n] : bridge_.counters()) status_.setCounter(name, n);
+    std::vector<std::string> reasons;
+    for (const auto& [channel, n] : bridge_.takeNewDrops(&reasons)) {
+      status_.countDropped(channel, "unconvertible", n);
     }
-    status_.setCounter("topics", static_cast<int64_t>(channel_ids_.size()));
-    // The converter's drops, by channel (the reason on stderr, rate-limited).
-    std::map<std::string, int64_t> by_channel;
-    for (const auto& [key, n] : converter_.dropped()) {
-      const auto colon = key.find(": ");
-      const std::string ch = key.substr(0, colon);
-      by_channel[ch] += n;
-      int64_t& seen = converter_drops_seen_[key];
-      if (n > seen) log_.warn("convert " + key, "ptz-foxglove-bridge: not converted: " + key);
-      seen = n;
+    for (const auto& key : reasons) {
+      log_.warn("convert " + key, "ptz-foxglove-bridge: not converted: " + key);
     }
-    int64_t total = 0;
-    for (const auto& [ch, n] : by_channel) {
-      int64_t& counted = converter_drops_counted_[ch];
-      if (n > counted) status_.countDropped(prefix_ + ch, "unconvertible", n - counted);
-      counted = n;
-      total += n;
-    }
-    status_.setCounter("converter_dropped", total);
-    int64_t ignored = 0;
-    for (const auto& [ch, n] : converter_.ignored()) ignored += n;
-    status_.setCounter("messages_ignored", ignored);  // channels the converter does not show
   }
 
   lcm::LCM* lcm_;
@@ -252,10 +183,8 @@ class BridgeNode {
   RateLimitedLog log_;
   std::string prefix_;
   std::string address_;
-  foxglove::Converter converter_;
   Server server_;
-  std::vector<uint32_t> channel_ids_;  // by converter topic index
-  std::map<std::string, int64_t> converter_drops_seen_, converter_drops_counted_;
+  Bridge bridge_;
   std::unique_ptr<NewestPerChannel> input_;
 };
 

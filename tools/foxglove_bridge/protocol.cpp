@@ -274,4 +274,10 @@ void ClientSubscriptions::unsubscribe(const json& j, HandleResult* r) {
   }
 }
 
+void ClientSubscriptions::addChannelsTo(std::set<uint32_t>* channels) const {
+  for (const auto& [channel, ids] : subscriptions_) {
+    if (!ids.empty()) channels->insert(channel);
+  }
+}
+
 }  // namespace ptz::foxglove_bridge

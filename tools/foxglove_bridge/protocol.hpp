@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <set>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -83,6 +84,8 @@ class ClientSubscriptions {
   // The subscription ids of a channel (empty when none).
   const std::vector<uint32_t>& of(uint32_t channel_id) const;
   size_t size() const { return channel_of_.size(); }
+  // Adds the channels this client subscribes to.
+  void addChannelsTo(std::set<uint32_t>* channels) const;
   bool has(uint32_t subscription_id) const { return channel_of_.count(subscription_id) > 0; }
 
  private:

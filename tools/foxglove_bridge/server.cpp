@@ -400,6 +400,13 @@ bool Server::hasClients() const {
   return !impl_->clients.empty();
 }
 
+std::set<uint32_t> Server::subscribedChannels() const {
+  std::set<uint32_t> channels;
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  for (const auto& [h, c] : impl_->clients) c.subscriptions.addChannelsTo(&channels);
+  return channels;
+}
+
 ServerStats Server::stats() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->stats;

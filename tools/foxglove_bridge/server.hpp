@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 
 #include "tools/foxglove_bridge/protocol.hpp"
@@ -72,6 +73,8 @@ class Server {
   void publish(uint32_t channel_id, uint64_t log_time_ns, std::string payload);
   // Whether any client is connected now (the owner may skip work nobody would see).
   bool hasClients() const;
+  // The channels some client subscribes to now (the owner converts only what someone sees).
+  std::set<uint32_t> subscribedChannels() const;
   ServerStats stats() const;
 
  private:

@@ -302,4 +302,40 @@ std::vector<std::string> parseProcessList(const std::string& list) {
   return names;
 }
 
+std::string formatReport(const Board& board, const std::vector<ProcessReport>& reports,
+                         double max_clock_offset_ms) {
+  std::string text = formatTable(reports) + formatClocks(board.clocks(), max_clock_offset_ms);
+  if (reports.empty()) text += "(no process heard)\n";
+  if (board.undecodable() > 0) {
+    text += "(" + std::to_string(board.undecodable()) + " status messages did not decode)\n";
+  }
+  if (board.ignored() > 0) {
+    text += "(" + std::to_string(board.ignored()) + " statuses of further processes ignored)\n";
+  }
+  if (board.clockIgnored() > 0) {
+    text += "(" + std::to_string(board.clockIgnored()) +
+            " statuses with a send time over a day off: not used for clocks)\n";
+  }
+  return text;
+}
+
+std::string verdictsKey(const std::vector<ProcessReport>& reports) {
+  std::string v;
+  for (const auto& r : reports) {
+    v +=
+        r.process + "@" + r.hostname + "=" + verdictName(r.verdict) + std::to_string(r.state) + ";";
+  }
+  return v;
+}
+
+ClockSummary summarizeClocks(const std::vector<HostClock>& clocks) {
+  ClockSummary s;
+  for (const auto& c : clocks) {
+    if (c.own || !std::isfinite(c.offset_ms)) continue;
+    s.max_abs_offset_ms = std::max(s.max_abs_offset_ms, std::abs(c.offset_ms));
+    s.hosts_too_far += c.too_far;
+  }
+  return s;
+}
+
 }  // namespace ptz::health

@@ -126,6 +126,19 @@ std::string formatTable(const std::vector<ProcessReport>& reports);
 // nothing when every status came from the listener's own host.
 std::string formatClocks(const std::vector<HostClock>& clocks, double max_clock_offset_ms);
 
+// What is printed: the table, the clocks, and notes of what was not heard or not used.
+std::string formatReport(const Board& board, const std::vector<ProcessReport>& reports,
+                         double max_clock_offset_ms);
+// What --changes_only compares: each process's verdict and state.
+std::string verdictsKey(const std::vector<ProcessReport>& reports);
+// The largest clock offset of another host and how many hosts are too far (the status's
+// counters: not one per host, whose names are the senders').
+struct ClockSummary {
+  double max_abs_offset_ms = 0;
+  int hosts_too_far = 0;
+};
+ClockSummary summarizeClocks(const std::vector<HostClock>& clocks);
+
 // The watchdog of --watch: the first process (of the expected ones, or of every one heard when
 // none is expected) that has been MISSING, STALE or ERROR without a break for grace_s.
 class Watchdog {

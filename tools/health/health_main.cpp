@@ -11,6 +11,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "common/transport/channel_regex.hpp"
 #include "common/transport/transport.hpp"
 #include "tools/health/health.hpp"
 
@@ -42,26 +43,6 @@ std::string ownHostname() {
   return host;
 }
 
-// What --changes-only compares: each process's verdict and state.
-std::string verdicts(const std::vector<ProcessReport>& reports) {
-  std::string v;
-  for (const auto& r : reports) {
-    v +=
-        r.process + "@" + r.hostname + "=" + verdictName(r.verdict) + std::to_string(r.state) + ";";
-  }
-  return v;
-}
-
-// Regex-safe: LCM subscribes by regular expression.
-std::string escapeRegex(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (std::string("\\^$.|?*+()[]{}").find(c) != std::string::npos) out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 class HealthNode {
  public:
   HealthNode(const Params& p, lcm::LCM* lcm, Options options)
@@ -74,7 +55,7 @@ class HealthNode {
         listen_s_(p.getDouble("listen_s")),
         grace_s_(p.getDouble("grace_s")),
         changes_only_(p.getBool("changes_only")) {
-    const std::string pattern = escapeRegex(channel(p, channels::kProcessStatusPrefix)) + ".*";
+    const std::string pattern = channelsStartingWith(channel(p, channels::kProcessStatusPrefix));
     statuses_ = std::make_unique<SafeSubscription<ptzstereo::process_status_t>>(
         *lcm_, pattern, status_,
         [this](const std::string&, const ptzstereo::process_status_t& m) { onStatus(m); });
@@ -104,7 +85,7 @@ class HealthNode {
       next_print += 1'000'000;
       if (next_print < now) next_print = now + 1'000'000;  // suspended, or a clock step
       const auto reports = judge();
-      const std::string now_verdicts = verdicts(reports);
+      const std::string now_verdicts = verdictsKey(reports);
       if (!changes_only_ || now_verdicts != printed_verdicts_) print(reports);
       printed_verdicts_ = now_verdicts;
       int not_ok = 0;
@@ -142,34 +123,14 @@ class HealthNode {
     return board_.judge(wallUtime());
   }
 
-  // The largest clock offset of another host and how many are too far (not one counter per
-  // host: names are the senders' and a counter once set stays in every status).
   void setClockCounters() {
-    double max_abs_ms = 0;
-    int too_far = 0;
-    for (const auto& c : board_.clocks()) {
-      if (c.own || !std::isfinite(c.offset_ms)) continue;
-      max_abs_ms = std::max(max_abs_ms, std::abs(c.offset_ms));
-      too_far += c.too_far;
-    }
-    status_.setCounter("clock_offset_us_max_abs", std::llround(max_abs_ms * 1e3));
-    status_.setCounter("clock_hosts_too_far", too_far);
+    const ClockSummary c = summarizeClocks(board_.clocks());
+    status_.setCounter("clock_offset_us_max_abs", std::llround(c.max_abs_offset_ms * 1e3));
+    status_.setCounter("clock_hosts_too_far", c.hosts_too_far);
   }
 
   void print(const std::vector<ProcessReport>& reports) {
-    std::string table = formatTable(reports) + formatClocks(board_.clocks(), max_clock_offset_ms_);
-    if (reports.empty()) table += "(no process heard)\n";
-    if (board_.undecodable() > 0) {
-      table += "(" + std::to_string(board_.undecodable()) + " status messages did not decode)\n";
-    }
-    if (board_.ignored() > 0) {
-      table += "(" + std::to_string(board_.ignored()) + " statuses of further processes ignored)\n";
-    }
-    if (board_.clockIgnored() > 0) {
-      table += "(" + std::to_string(board_.clockIgnored()) +
-               " statuses with a send time over a day off: not used for clocks)\n";
-    }
-    std::fputs(table.c_str(), stdout);
+    std::fputs(formatReport(board_, reports, max_clock_offset_ms_).c_str(), stdout);
     std::fflush(stdout);
   }
 

@@ -37,30 +37,47 @@ void McapExporter::write(const std::string& topic, const std::string& schema_nam
   ++written_[topic];
 }
 
+void McapExporter::writeAll(const std::vector<foxglove::Message>& messages) {
+  for (const foxglove::Message& m : messages) {
+    const foxglove::Topic& t = converter_.topics().at(static_cast<size_t>(m.topic));
+    write(t.name, t.schema_name, t.schema_json, m.log_time_ns, m.publish_time_ns, m.json);
+  }
+}
+
 void McapExporter::add(const std::string& channel, const void* data, size_t size,
                        int64_t receive_utime) {
   ++messages_in_;
   last_receive_utime_ = std::max(last_receive_utime_, receive_utime);
-  for (const foxglove::Message& m : converter_.convert(channel, data, size, receive_utime)) {
-    const foxglove::Topic& t = converter_.topics().at(static_cast<size_t>(m.topic));
-    write(t.name, t.schema_name, t.schema_json, m.log_time_ns, m.publish_time_ns, m.json);
+  const bool ours = channel.compare(0, prefix_.size(), prefix_) == 0;
+  const std::string name = ours ? channel.substr(prefix_.size()) : channel;
+  if (ours && name == channels::kStereoFrame) {
+    // The largest message: decoded once, for the images and the run's numbers.
+    ptzstereo::stereo_frame_t m;
+    std::string why;
+    if (decodeChecked(data, size, &m, &why)) {
+      ++decoded_[name];
+      writeAll(converter_.convertFrame(channel, m, receive_utime));
+      metrics_.onFrame(m);
+      frame_receive_utime_.emplace(m.seq, receive_utime);
+      return;
+    }  // else the converter counts it dropped (its check fails before anything is decoded)
   }
-  const std::string& prefix = prefix_;
-  if (channel.compare(0, prefix.size(), prefix) == 0) {
-    feedMetrics(channel.substr(prefix.size()), data, size, receive_utime);
-  }
+  writeAll(converter_.convert(channel, data, size, receive_utime));
+  if (ours) feedMetrics(name, data, size);
 }
 
-void McapExporter::feedMetrics(const std::string& channel, const void* data, size_t size,
-                               int64_t receive_utime) {
+int64_t McapExporter::decodes(const std::string& channel) const {
+  const auto count = [&channel](const std::map<std::string, int64_t>& by_channel) {
+    const auto it = by_channel.find(channel);
+    return it == by_channel.end() ? int64_t{0} : it->second;
+  };
+  return count(decoded_) + count(converter_.decoded());
+}
+
+void McapExporter::feedMetrics(const std::string& channel, const void* data, size_t size) {
   namespace ch = channels;
   std::string why;
-  if (channel == ch::kStereoFrame) {
-    ptzstereo::stereo_frame_t m;
-    if (!decodeChecked(data, size, &m, &why)) return;
-    metrics_.onFrame(m);
-    frame_receive_utime_.emplace(m.seq, receive_utime);
-  } else if (channel == ch::kSimTruth) {
+  if (channel == ch::kSimTruth) {
     ptzstereo::sim_truth_t m;
     if (decodeChecked(data, size, &m, &why)) metrics_.onTruth(m);
   } else if (channel == ch::kObjectPose) {

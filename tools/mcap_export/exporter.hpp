@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "common/rig.hpp"
 #include "tools/foxglove/convert.hpp"
@@ -38,19 +39,24 @@ class McapExporter {
   // Messages written per MCAP topic.
   const std::map<std::string, int64_t>& written() const { return written_; }
   int64_t messagesIn() const { return messages_in_; }
+  // LCM messages of a channel (without the prefix) decoded, by the converter and for the
+  // run's numbers together.
+  int64_t decodes(const std::string& channel) const;
   uint64_t bytesWritten() const { return writer_.bytesWritten(); }
 
  private:
   void write(const std::string& topic, const std::string& schema_name, const std::string& schema,
              int64_t log_time_ns, int64_t publish_time_ns, const std::string& json);
-  void feedMetrics(const std::string& channel, const void* data, size_t size,
-                   int64_t receive_utime);
+  void writeAll(const std::vector<foxglove::Message>& messages);
+  // The run's numbers of a channel (without the prefix) but STEREO_FRAME.
+  void feedMetrics(const std::string& channel, const void* data, size_t size);
 
   foxglove::Converter converter_;
   mcap::Writer writer_;
   RunMetrics metrics_;
   std::map<std::string, uint16_t> schema_ids_, channel_ids_;
   std::map<std::string, int64_t> written_;
+  std::map<std::string, int64_t> decoded_;          // for the run's numbers, by channel
   std::map<int64_t, int64_t> frame_receive_utime_;  // seq -> when its STEREO_FRAME arrived
   std::string prefix_;
   int64_t messages_in_ = 0;

@@ -10,114 +10,31 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <map>
 #include <memory>
 #include <string>
-#include <utility>
-#include <vector>
 
 #include "common/freshness.hpp"
 #include "common/transport/transport.hpp"
-#include "ptzstereo/object_pose_t.hpp"
-#include "ptzstereo/object_tracks_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "tools/logs/log_reader.hpp"
+#include "tools/replay/replay_answers.hpp"
 
 namespace {
 
-template <typename Message>
-std::vector<uint8_t> encoded(const Message& m) {
-  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  return bytes;
-}
-
-// The bytes without the publish time: what must be identical between runs.
-template <typename Message>
-std::vector<uint8_t> canonical(Message m) {
-  m.publish_utime = 0;
-  return encoded(m);
-}
-
-double largestPositionChange(const ptzstereo::object_pose_t& a, const ptzstereo::object_pose_t& b) {
-  if (a.num_objects != b.num_objects) return INFINITY;
-  double worst = 0;
-  for (size_t i = 0; i < a.objects.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      worst = std::max(worst, std::abs(a.objects[i].position_m[k] - b.objects[i].position_m[k]));
-    }
-  }
-  return worst;
-}
-
-// One of ptz-detect's answers to a frame: the logged ones, the replayed ones, by frame_seq.
-template <typename Message>
-struct Answers {
-  explicit Answers(std::string name) : what(std::move(name)) {}
-  std::string what;  // "pose", "tracks"
-  std::map<int64_t, Message> logged, replies, replayed;
-  int64_t identical = 0, different = 0, not_logged = 0;
-  // Checked before it is decoded (a hostile count must not make the replay allocate).
-  void onReply(const lcm::ReceiveBuffer* rbuf, const std::string&) {
-    Message m;
-    if (ptz::decodeChecked(rbuf->data, rbuf->data_size, &m, nullptr)) replies[m.frame_seq] = m;
-  }
-  // The reply to frame seq, stamped with the frame's logged capture time, kept for the end.
-  Message* take(int64_t seq, int64_t logged_utime) {
-    auto it = replies.find(seq);
-    if (it == replies.end()) return nullptr;
-    it->second.utime = logged_utime;
-    Message* kept = &(replayed[seq] = it->second);
-    replies.erase(replies.begin(), replies.upper_bound(seq));
-    return kept;
-  }
-  void compare() {
-    for (const auto& [seq, r] : replayed) {
-      const auto it = logged.find(seq);
-      if (it == logged.end()) {
-        ++not_logged;
-      } else if (canonical(it->second) == canonical(r)) {
-        ++identical;
-      } else {
-        ++different;
-        report(seq, it->second, r);
-      }
-    }
-  }
-  void report(int64_t seq, const Message&, const Message&) const {
-    std::fprintf(stderr, "ptz-replay: frame %lld: %s differs\n", static_cast<long long>(seq),
-                 what.c_str());
-  }
-};
-
-template <>
-void Answers<ptzstereo::object_pose_t>::report(int64_t seq, const ptzstereo::object_pose_t& a,
-                                               const ptzstereo::object_pose_t& b) const {
-  std::fprintf(stderr, "ptz-replay: frame %lld: pose differs (largest position change %g m)\n",
-               static_cast<long long>(seq), largestPositionChange(a, b));
-}
+using ptz::tools::Answers;
 
 void noteUp(const lcm::ReceiveBuffer*, const std::string&, bool* up) {
   *up = true;
 }
 
 template <typename Message>
-void writeEvent(lcm::LogFile* out, int64_t eventnum, const char* channel, const Message& m) {
-  std::vector<uint8_t> bytes = encoded(m);
-  lcm::LogEvent e{};
-  e.eventnum = eventnum;
-  e.timestamp = m.publish_utime;
-  e.channel = channel;
-  e.datalen = static_cast<int32_t>(bytes.size());
-  e.data = bytes.data();
-  out->writeEvent(&e);
+void onReply(const lcm::ReceiveBuffer* rbuf, const std::string&, Answers<Message>* answers) {
+  answers->onReply(rbuf->data, rbuf->data_size);
 }
 
 // The replay; returns the exit code. Throws LogError for a log it cannot use.
 int replay(const ptz::Params& params, lcm::LCM& lcm) {
-  using ptz::tools::log_exit::kOk;
   const std::string path = params.getString("log");
   if (path.empty()) throw ptz::ConfigError("--log FILE is required");
   ptz::tools::LogReader reader(path);  // a missing log before anything else
@@ -137,10 +54,10 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
   Answers<ptzstereo::object_pose_t> poses("pose");
   Answers<ptzstereo::object_tracks_t> tracks("tracks");
   bool detect_up = false;
-  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectPose),
-                &Answers<ptzstereo::object_pose_t>::onReply, &poses);
-  lcm.subscribe(ptz::channel(params, ptz::channels::kObjectTracks),
-                &Answers<ptzstereo::object_tracks_t>::onReply, &tracks);
+  lcm.subscribeFunction(ptz::channel(params, ptz::channels::kObjectPose),
+                        &onReply<ptzstereo::object_pose_t>, &poses);
+  lcm.subscribeFunction(ptz::channel(params, ptz::channels::kObjectTracks),
+                        &onReply<ptzstereo::object_tracks_t>, &tracks);
   lcm.subscribeFunction(ptz::channel(params, "PROCESS_STATUS_PTZ_DETECT"), &noteUp, &detect_up);
   auto waitFor = [&](auto done) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -152,7 +69,9 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
   };
   // One pass: frames are replayed as they come, the logged answers (which follow their frames in
   // the log) are collected, and the two compared at the end (older logs have no tracks: counted).
-  int64_t frames = 0, unanswered = 0, undecodable = 0;
+  ptz::tools::ReplayTally tally;
+  int64_t& frames = tally.frames;
+  int64_t& undecodable = tally.undecodable;
   const std::string frame_channel = ptz::channel(params, ptz::channels::kStereoFrame);
   while (const lcm::LogEvent* ev = reader.next()) {
     if (ptz::StopFlag::stopRequested()) break;
@@ -192,7 +111,7 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
     const bool answered = waitFor(
         [&] { return poses.replies.count(frame.seq) > 0 && tracks.replies.count(frame.seq) > 0; });
     if (!answered) {
-      ++unanswered;
+      ++tally.unanswered;
       std::fprintf(stderr, "ptz-replay: no %s for frame %lld within the timeout\n",
                    poses.replies.count(frame.seq) ? "tracks" : "pose",
                    static_cast<long long>(frame.seq));
@@ -202,9 +121,10 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
     const auto* pose = poses.take(frame.seq, logged_utime);
     const auto* frame_tracks = tracks.take(frame.seq, logged_utime);
     if (out) {
-      writeEvent(out.get(), 2 * (frames - 1), ptz::channels::kObjectPose, *pose);
+      ptz::tools::writeEvent(out.get(), 2 * (frames - 1), ptz::channels::kObjectPose, *pose);
       if (frame_tracks) {
-        writeEvent(out.get(), 2 * frames - 1, ptz::channels::kObjectTracks, *frame_tracks);
+        ptz::tools::writeEvent(out.get(), 2 * frames - 1, ptz::channels::kObjectTracks,
+                               *frame_tracks);
       }
     }
   }
@@ -230,26 +150,13 @@ int replay(const ptz::Params& params, lcm::LCM& lcm) {
                  "ptz-replay: warning: the log is damaged; replayed what could be read:\n%s",
                  reader.describeBreaks().c_str());
   }
-  std::printf(
-      "replayed %lld frames: %lld poses identical to the log, %lld different, %lld without a "
-      "logged pose; %lld tracks identical, %lld different, %lld without logged tracks; %lld "
-      "frames unanswered\n",
-      static_cast<long long>(frames), static_cast<long long>(poses.identical),
-      static_cast<long long>(poses.different), static_cast<long long>(poses.not_logged),
-      static_cast<long long>(tracks.identical), static_cast<long long>(tracks.different),
-      static_cast<long long>(tracks.not_logged), static_cast<long long>(unanswered));
-  const bool check = params.getBool("check");
-  int code = kOk;
-  if (check && poses.different + tracks.different > 0) {
-    code = ptz::tools::log_exit::kVerdict;  // perception changed
-  } else if (unanswered > 0 || (check && poses.identical == 0)) {
-    code = ptz::tools::log_exit::kUnanswered;  // ptz-detect did not answer
-  }
+  std::fputs(ptz::tools::replaySummary(tally, poses, tracks).c_str(), stdout);
+  const int code = ptz::tools::replayExitCode(params.getBool("check"), tally, poses, tracks);
   if (out_file) {
     out.reset();  // flushed and closed
-    if (unanswered > 0) {
+    if (tally.unanswered > 0) {
       std::fprintf(stderr, "ptz-replay: %lld frames unanswered: --out not written\n",
-                   static_cast<long long>(unanswered));
+                   static_cast<long long>(tally.unanswered));
     } else {
       out_file->commit();
     }

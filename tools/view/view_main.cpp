@@ -7,16 +7,13 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <cmath>
 #include <cstdlib>
-#include <deque>
-#include <iterator>
-#include <map>
 #include <memory>
 
 #include "common/transport/transport.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
+#include "tools/view/view_state.hpp"
 #include "tools/view/viewer.hpp"
 
 namespace ptz::tools {
@@ -30,13 +27,13 @@ class ViewNode {
       : lcm_(lcm),
         status_(lcm, p, "ptz-view"),
         rig_(std::move(rig)),
-        max_wait_us_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)),
         screenshot_dir_(p.getString("screenshot_dir")),
         screenshot_after_(p.getInt("screenshot_after_frames")),
         max_window_width_px_(p.getInt("max_window_width_px")),
         preview_(p.getBool("preview")),
         ch_frame_(channel(p, preview_ ? channels::kStereoPreview : channels::kStereoFrame)),
-        ch_select_(channel(p, channels::kTargetSelect)) {
+        ch_select_(channel(p, channels::kTargetSelect)),
+        state_(static_cast<int64_t>(p.getDouble("max_wait_s") * 1e6)) {
     frames_ = std::make_unique<SafeSubscription<ptzstereo::stereo_frame_t>>(
         *lcm_, ch_frame_, status_,
         [this](const std::string& ch, const ptzstereo::stereo_frame_t& m) { onFrame(ch, m); },
@@ -44,35 +41,26 @@ class ViewNode {
     detections_ = std::make_unique<SafeSubscription<ptzstereo::object_detections_t>>(
         *lcm_, channel(p, channels::kObjectDetections), status_,
         [this](const std::string&, const ptzstereo::object_detections_t& m) {
-          detections_by_seq_[m.frame_seq] = m;
-          keepRecent(&detections_by_seq_);
+          state_.onDetections(m);
         });
     poses_ = std::make_unique<SafeSubscription<ptzstereo::object_pose_t>>(
         *lcm_, channel(p, channels::kObjectPose), status_,
-        [this](const std::string&, const ptzstereo::object_pose_t& m) {
-          poses_by_seq_[m.frame_seq] = m;
-          keepRecent(&poses_by_seq_);
-        });
+        [this](const std::string&, const ptzstereo::object_pose_t& m) { state_.onPose(m); });
     tracks_ = std::make_unique<SafeSubscription<ptzstereo::object_tracks_t>>(
         *lcm_, channel(p, channels::kObjectTracks), status_,
-        [this](const std::string&, const ptzstereo::object_tracks_t& m) {
-          tracks_by_seq_[m.frame_seq] = m;
-          keepRecent(&tracks_by_seq_);
-          tracks_seen_ = true;
-        });
+        [this](const std::string&, const ptzstereo::object_tracks_t& m) { state_.onTracks(m); });
     control_states_ = std::make_unique<SafeSubscription<ptzstereo::control_state_t>>(
         *lcm_, channel(p, channels::kControlState), status_,
-        [this](const std::string&, const ptzstereo::control_state_t& m) { control_state_ = m; });
+        [this](const std::string&, const ptzstereo::control_state_t& m) {
+          state_.onControlState(m);
+        });
     setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
         *lcm_, channel(p, channels::kPtzSetpoint), status_,
-        [this](const std::string&, const ptzstereo::ptz_setpoint_t& m) { setpoint_ = m; });
+        [this](const std::string&, const ptzstereo::ptz_setpoint_t& m) { state_.onSetpoint(m); });
     control_ = std::make_unique<SafeSubscription<ptzstereo::process_status_t>>(
         *lcm_, channel(p, "PROCESS_STATUS_PTZ_CONTROL"), status_,
         [this](const std::string&, const ptzstereo::process_status_t& m) {
-          for (const auto& c : m.counters) {
-            if (c.name == "delay_us_p50") delay_ms_p50_ = c.value / 1000.0;
-            if (c.name == "delay_us_p99") delay_ms_p99_ = c.value / 1000.0;
-          }
+          state_.onControlStatus(m);
         });
     // Resizable, so that two 1080p images fit a screen; HighGUI maps clicks back to the canvas.
     cv::namedWindow(kWindow, cv::WINDOW_NORMAL | cv::WINDOW_KEEPRATIO | cv::WINDOW_GUI_NORMAL);
@@ -98,32 +86,6 @@ class ViewNode {
   }
 
  private:
-  // Messages for frames not drawn yet, by frame_seq: at most kKept, those farthest from the
-  // newest frame dropped first (bogus frame_seqs can neither grow them nor crowd out the rest).
-  static constexpr size_t kKept = 64;
-  template <class Map>
-  void keepRecent(Map* by_seq) const {
-    const auto far = [&](int64_t seq) {
-      return std::abs(static_cast<double>(seq) - static_cast<double>(newest_frame_seq_));
-    };
-    while (by_seq->size() > kKept) {
-      if (far(by_seq->begin()->first) >= far(by_seq->rbegin()->first)) {
-        by_seq->erase(by_seq->begin());
-      } else {
-        by_seq->erase(std::prev(by_seq->end()));
-      }
-    }
-  }
-  template <class Map>
-  static void forgetUpTo(Map* by_seq, int64_t seq) {
-    by_seq->erase(by_seq->begin(), by_seq->upper_bound(seq));
-  }
-  void forgetUpTo(int64_t seq) {
-    forgetUpTo(&detections_by_seq_, seq);
-    forgetUpTo(&poses_by_seq_, seq);
-    forgetUpTo(&tracks_by_seq_, seq);
-  }
-
   // A left click on the shown frame: TARGET_SELECT for the pixel under it (highgui calls this
   // from waitKey, on the loop's thread).
   static void onMouse(int event, int x, int y, int, void* self) {
@@ -142,51 +104,33 @@ class ViewNode {
     std::fflush(stdout);
   }
 
-  struct Pending {
-    ptzstereo::stereo_frame_t frame;
-    int64_t received_us;
-  };
-
   void onFrame(const std::string& ch, const ptzstereo::stereo_frame_t& m) {
     status_.countIn(ch, -1);
-    newest_frame_seq_ = m.seq;
-    const int64_t now = wallUtime();
-    frame_times_us_.push_back(now);
-    while (frame_times_us_.front() < now - 1'000'000) frame_times_us_.pop_front();
-    if (paused_ && !step_) {
-      status_.increment("frames_not_drawn");
-      // Their detections, poses and tracks will never be drawn either.
-      forgetUpTo(m.seq);
-      return;
-    }
-    // Kept as it came: only the frame that is drawn is decoded (a newer one replaces it).
-    if (pending_) status_.increment("frames_not_drawn");
-    pending_ = Pending{m, now};
+    state_.onFrame(m, wallUtime(), paused_ && !step_);
+    if (state_.framesNotDrawn() > 0)
+      status_.setCounter("frames_not_drawn", state_.framesNotDrawn());
   }
 
   void drawReady() {
-    if (!pending_) return;
-    const ptzstereo::stereo_frame_t& m = pending_->frame;
-    const int64_t seq = m.seq;
-    // Tracks are waited for once a ptz-detect has sent some (an older log has none).
-    const bool complete = detections_by_seq_.count(seq) && poses_by_seq_.count(seq) &&
-                          (!tracks_seen_ || tracks_by_seq_.count(seq));
-    if (!complete && wallUtime() - pending_->received_us < max_wait_us_) return;
-    ViewInput in;
+    const int64_t now = wallUtime();
+    const ptzstereo::stereo_frame_t* m = state_.ready(now);
+    if (!m) return;
+    const int64_t seq = m->seq;
+    ViewInput in = state_.input(now, paused_);
     std::string error;
     // The rig's size bounds what decoding may cost (a small JPEG can claim any size).
-    if (!(preview_ ? checkPreviewMatchesRig(m, rig_.left.width, rig_.left.height, &error)
-                   : checkFrameMatchesRig(m, rig_.left.width, rig_.left.height, &error))) {
+    if (!(preview_ ? checkPreviewMatchesRig(*m, rig_.left.width, rig_.left.height, &error)
+                   : checkFrameMatchesRig(*m, rig_.left.width, rig_.left.height, &error))) {
       status_.countDropped(ch_frame_, "size_mismatch");
       log_.warn("size", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
-      pending_.reset();
+      state_.done(false, now);
       return;
     }
-    if (!decodeImage(m.left, &in.left, &error) || !decodeImage(m.right, &in.right, &error) ||
+    if (!decodeImage(m->left, &in.left, &error) || !decodeImage(m->right, &in.right, &error) ||
         in.left.type() != CV_8UC3) {
       status_.countDropped(ch_frame_, "bad_image");
       log_.warn("image", "ptz-view: frame " + std::to_string(seq) + " not drawn: " + error);
-      pending_.reset();
+      state_.done(false, now);
       return;
     }
     if (preview_) {  // drawn at the rig's size: the detections are in its pixels
@@ -194,25 +138,9 @@ class ViewNode {
       cv::resize(in.left, in.left, rig_size, 0, 0, cv::INTER_LINEAR);
       cv::resize(in.right, in.right, rig_size, 0, 0, cv::INTER_LINEAR);
     }
-    in.left_ptz = {m.left.pan_rad, m.left.tilt_rad, m.left.zoom};
-    in.right_ptz = {m.right.pan_rad, m.right.tilt_rad, m.right.zoom};
-    in.seq = seq;
-    if (detections_by_seq_.count(seq)) in.detections = detections_by_seq_[seq];
-    if (poses_by_seq_.count(seq)) in.pose = poses_by_seq_[seq];
-    if (tracks_by_seq_.count(seq)) in.tracks = tracks_by_seq_[seq];
-    in.setpoint = setpoint_;
-    in.control = control_state_;
-    in.delay_ms_p50 = delay_ms_p50_;
-    in.delay_ms_p99 = delay_ms_p99_;
-    in.frame_rate_hz = static_cast<double>(frame_times_us_.size());
-    const int64_t now = wallUtime();
-    drawn_times_us_.push_back(now);
-    while (drawn_times_us_.front() < now - 1'000'000) drawn_times_us_.pop_front();
-    in.drawn_rate_hz = static_cast<double>(drawn_times_us_.size());
-    in.frames_dropped = status_.counter("frames_not_drawn");
-    in.paused = paused_;
     canvas_ = drawView(rig_, in);
     canvas_seq_ = seq;
+    state_.done(true, now);
     if (canvas_.size() != window_canvas_size_) {  // the first frame, or another image size
       window_canvas_size_ = canvas_.size();
       const double scale = std::min(1.0, max_window_width_px_ / canvas_.cols);
@@ -222,10 +150,7 @@ class ViewNode {
     cv::imshow(kWindow, canvas_);
     status_.increment("frames_drawn");
     status_.setCounter("last_frame_drawn", seq);
-    pending_.reset();
     step_ = false;
-    // Only the frames still to come are worth keeping.
-    forgetUpTo(seq);
     if (screenshot_after_ > 0 && status_.counter("frames_drawn") == screenshot_after_) {
       screenshot();
     }
@@ -247,22 +172,12 @@ class ViewNode {
   StatusReporter status_;
   RateLimitedLog log_;
   StereoRig rig_;
-  int64_t max_wait_us_;
   std::string screenshot_dir_;
   int64_t screenshot_after_;
   double max_window_width_px_;
   bool preview_;
   std::string ch_frame_, ch_select_;
-  std::optional<Pending> pending_;
-  std::map<int64_t, ptzstereo::object_detections_t> detections_by_seq_;
-  std::map<int64_t, ptzstereo::object_pose_t> poses_by_seq_;
-  std::map<int64_t, ptzstereo::object_tracks_t> tracks_by_seq_;
-  bool tracks_seen_ = false;
-  int64_t newest_frame_seq_ = 0;
-  std::optional<ptzstereo::ptz_setpoint_t> setpoint_;
-  std::optional<ptzstereo::control_state_t> control_state_;
-  double delay_ms_p50_ = NAN, delay_ms_p99_ = NAN;
-  std::deque<int64_t> frame_times_us_, drawn_times_us_;
+  ViewState state_;
   cv::Mat canvas_;
   cv::Size window_canvas_size_;  // the canvas size the window was last sized for
   int64_t canvas_seq_ = 0;

@@ -441,3 +441,30 @@ TEST(HealthClock, OneStatusStampedAheadDoesNotMoveTheHostsClock) {
   sendTimed(&board, "ptz-detect", "host-a", kT0 + 11 * kSecond, 100'000, 500);
   EXPECT_NEAR(clockOf(board, "host-a").offset_ms, 99.5, 1e-9);
 }
+
+TEST(HealthReport, NothingHeardSaysSoAndTheKeyFollowsVerdictAndState) {
+  Board board({{}, 3.0});
+  const std::string empty = formatReport(board, board.judge(kT0), 5.0);
+  EXPECT_NE(empty.find("(no process heard)\n"), std::string::npos) << empty;
+  board.setUndecodable(2);
+  board.onStatus(status("ptz-sim"), kT0);
+  const auto ok = board.judge(kT0);
+  const std::string text = formatReport(board, ok, 5.0);
+  EXPECT_EQ(text.find("(no process heard)"), std::string::npos) << text;
+  EXPECT_NE(text.find("(2 status messages did not decode)\n"), std::string::npos) << text;
+  const std::string key = verdictsKey(ok);
+  board.onStatus(status("ptz-sim", Status::STATE_ERROR, "broken"), kT0 + 1);
+  EXPECT_NE(verdictsKey(board.judge(kT0 + 1)), key);
+  EXPECT_EQ(verdictsKey(board.judge(kT0 + 2)), verdictsKey(board.judge(kT0 + 1)));
+}
+
+TEST(HealthReport, TheClockSummaryIsTheLargestOtherHostAndHowManyAreTooFar) {
+  std::vector<HostClock> clocks(4);
+  clocks[0] = {"listener", 50.0, 9, /*own=*/true, false};  // its own host: never counted
+  clocks[1] = {"host-a", -12.5, 9, false, true};
+  clocks[2] = {"host-b", 3.0, 9, false, false};
+  clocks[3] = {"host-c", NAN, 0, false, false};
+  const ClockSummary s = summarizeClocks(clocks);
+  EXPECT_DOUBLE_EQ(s.max_abs_offset_ms, 12.5);
+  EXPECT_EQ(s.hosts_too_far, 1);
+}

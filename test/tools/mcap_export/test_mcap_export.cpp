@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <map>
 #include <string>
 
 #include "support/mcap_check.hpp"
 #include "support/run_program.hpp"
 #include "tools/logs/log_reader.hpp"
+#include "tools/mcap_export/exporter.hpp"
 
 using nlohmann::json;
 
@@ -168,4 +170,28 @@ TEST(McapExport, BadInputHasItsExitCodeAndLeavesNoFile) {
   EXPECT_EQ(run.exit_code, ptz::tools::log_exit::kUsage);
   EXPECT_NE(run.err.find("compression"), std::string::npos) << run.err;
   EXPECT_FALSE(ptz::test::exists(out));
+}
+
+// A STEREO_FRAME is the largest message of a run: the converter and the run's numbers share one
+// decode of it.
+TEST(McapExport, EachStereoFrameIsDecodedOnce) {
+  const std::string out = tempPath("decode_once.mcap");
+  ptz::tools::ExportOptions options;
+  options.target_class = "red_ball";
+  int64_t frames = 0;
+  {
+    ptz::tools::McapExporter exporter(out, ptz::StereoRig::makeDefault(), options);
+    ptz::tools::LogReader log(kFixture);
+    while (const lcm::LogEvent* ev = log.next()) {
+      frames += std::string(ev->channel) == "STEREO_FRAME";
+      exporter.add(ev->channel, ev->data, static_cast<size_t>(ev->datalen), ev->timestamp);
+    }
+    exporter.finish({});
+    ASSERT_GT(frames, 10);
+    EXPECT_EQ(exporter.decodes("STEREO_FRAME"), frames);
+    // Every frame still reaches both the images and the run's numbers.
+    EXPECT_EQ(exporter.written().at("/left/image"), frames);
+    EXPECT_GE(exporter.written().at("/tf"), frames);
+  }
+  std::remove(out.c_str());
 }
