@@ -18,8 +18,8 @@
 
 #include "common/config.hpp"
 #include "common/measure.hpp"  // wallUtime, percentile (re-exported)
-#include "common/transport/message_check.hpp"
 #include "common/rig.hpp"
+#include "common/transport/message_check.hpp"
 #include "ptzstereo/image_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
@@ -120,9 +120,6 @@ ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::
 void addImageEncodingParams(Params& params);
 // image_t::ENCODING_RAW or ENCODING_JPEG; throws ConfigError for another name or quality.
 int8_t imageEncodingFrom(const Params& params);
-// Decodes to BGR8 (or GRAY8) after checkImage. Returns false and says why for anything
-// inconsistent.
-bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
 
 // Keeps freed memory in the process for reuse (no unmapping or trimming of the heap): frames'
 // buffers are not page-faulted in again every frame. runProcess does it first.
