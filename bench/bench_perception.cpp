@@ -10,8 +10,8 @@
 
 #include "bench_util.hpp"
 #include "common/transport/transport.hpp"
-#include "perception/detect/detector.hpp"
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/stereo.hpp"
 #include "sim/simulator.hpp"
 
 using ptz::bench::Clock;

@@ -1,4 +1,4 @@
-// Windows for speed (perception/detect/windows.hpp, pyramid.hpp): ptz-detect's detection per
+// Windows for speed (perception/detection/windows.hpp, pyramid.hpp): ptz-detect's detection per
 // stereo frame (decoding of what is scanned, detection, association, tracking) on rendered frames
 // of the default scenario at VGA and 1080p, the cameras following the ball: full scans at full
 // resolution against pyramid full scans (JPEG and raw), and windows around the tracked ball with
@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "perception/detect/detector.hpp"
-#include "perception/detect/jpeg_window.hpp"
-#include "perception/detect/stereo.hpp"
-#include "perception/detect/tracker.hpp"
-#include "perception/detect/windows.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/stereo.hpp"
+#include "perception/detection/windows.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
+#include "perception/tracking/tracker.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
 

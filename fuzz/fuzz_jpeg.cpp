@@ -20,7 +20,7 @@
 #include "common/transport/message_check.hpp"
 #include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
-#include "perception/detect/jpeg_window.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
 
 namespace {
 constexpr size_t kPrefix = 5;

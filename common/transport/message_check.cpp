@@ -1,6 +1,8 @@
 #include "common/transport/message_check.hpp"
 
 #include <jpeglib.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <csetjmp>
@@ -412,6 +414,29 @@ bool checkPreviewMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, i
            ", not a colour image of the rig's " + std::to_string(width) + "x" +
            std::to_string(height) + " shape";
     return false;
+  }
+  return true;
+}
+
+bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error) {
+  if (!checkImage(msg, kMaxImageSidePx, error)) return false;
+  const int channels = msg.pixel_format == ptzstereo::image_t::PIXEL_GRAY8 ? 1 : 3;
+  if (msg.encoding == ptzstereo::image_t::ENCODING_RAW) {
+    cv::Mat view(msg.height, msg.width, CV_8UC(channels), const_cast<uint8_t*>(msg.data.data()),
+                 static_cast<size_t>(msg.row_stride));
+    view.copyTo(*image);
+  } else {
+    // The header has been checked against width, height and channels: the decoded size is known.
+    // EXIF orientation is ignored: a camera's frame is as its header says.
+    *image = cv::imdecode(msg.data, (channels == 3 ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE) |
+                                        cv::IMREAD_IGNORE_ORIENTATION);
+    if (image->empty() || image->cols != msg.width || image->rows != msg.height) {
+      *error = "JPEG data does not decode";
+      return false;
+    }
+  }
+  if (msg.pixel_format == ptzstereo::image_t::PIXEL_RGB8) {
+    cv::cvtColor(*image, *image, cv::COLOR_RGB2BGR);
   }
   return true;
 }

@@ -3,8 +3,11 @@
 // ask for gigabytes. checkEncoding walks the encoding (fingerprint, every count and string length
 // against the bytes left) without allocating; decodeChecked decodes only what passed, so a message
 // costs at most its own size. Then the contents: images (both of a frame alike, a JPEG's own header
-// against the message's width, height and format), finite numbers where a consumer needs them.
+// against the message's width, height and format), finite numbers where a consumer needs them;
+// and an image's pixels once it passed (decodeImage). No LCM: the message types alone.
 #pragma once
+
+#include <opencv2/core.hpp>
 
 #include <cstddef>
 #include <cstdint>
@@ -57,5 +60,9 @@ bool checkFrameMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int
 // larger than width x height and of its shape to a pixel.
 bool checkPreviewMatchesRig(const ptzstereo::stereo_frame_t& frame, int width, int height,
                             std::string* why);
+
+// An image's pixels as BGR8 (or GRAY8) after checkImage (raw rows copied, a JPEG decoded whole,
+// RGB8 turned to BGR8). Returns false and says why for anything inconsistent.
+bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
 
 }  // namespace ptz

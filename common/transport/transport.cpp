@@ -214,29 +214,6 @@ int8_t imageEncodingFrom(const Params& params) {
   return enc == "jpeg" ? ptzstereo::image_t::ENCODING_JPEG : ptzstereo::image_t::ENCODING_RAW;
 }
 
-bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error) {
-  if (!checkImage(msg, kMaxImageSidePx, error)) return false;
-  const int channels = msg.pixel_format == ptzstereo::image_t::PIXEL_GRAY8 ? 1 : 3;
-  if (msg.encoding == ptzstereo::image_t::ENCODING_RAW) {
-    cv::Mat view(msg.height, msg.width, CV_8UC(channels), const_cast<uint8_t*>(msg.data.data()),
-                 static_cast<size_t>(msg.row_stride));
-    view.copyTo(*image);
-  } else {
-    // The header has been checked against width, height and channels: the decoded size is known.
-    // EXIF orientation is ignored: a camera's frame is as its header says.
-    *image = cv::imdecode(msg.data, (channels == 3 ? cv::IMREAD_COLOR : cv::IMREAD_GRAYSCALE) |
-                                        cv::IMREAD_IGNORE_ORIENTATION);
-    if (image->empty() || image->cols != msg.width || image->rows != msg.height) {
-      *error = "JPEG data does not decode";
-      return false;
-    }
-  }
-  if (msg.pixel_format == ptzstereo::image_t::PIXEL_RGB8) {
-    cv::cvtColor(*image, *image, cv::COLOR_RGB2BGR);
-  }
-  return true;
-}
-
 void keepFreedMemory() {
   // Frame-sized buffers come and go every frame. By default glibc maps each above its threshold
   // afresh and trims the heap after it, so every frame page-faults its buffers in again: a third

@@ -120,9 +120,6 @@ ptzstereo::stereo_frame_t makeStereoFrame(int64_t utime, int64_t seq, const cv::
 void addImageEncodingParams(Params& params);
 // image_t::ENCODING_RAW or ENCODING_JPEG; throws ConfigError for another name or quality.
 int8_t imageEncodingFrom(const Params& params);
-// Decodes to BGR8 (or GRAY8) after checkImage. Returns false and says why for anything
-// inconsistent.
-bool decodeImage(const ptzstereo::image_t& msg, cv::Mat* image, std::string* error);
 
 // Keeps freed memory in the process for reuse (no unmapping or trimming of the heap): frames'
 // buffers are not page-faulted in again every frame. runProcess does it first.

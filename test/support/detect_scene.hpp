@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "perception/detect/detector.hpp"
-#include "perception/detect/jpeg_window.hpp"
-#include "perception/detect/windows.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/windows.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
 #include "sim/scene.hpp"
 
 namespace ptz::test {

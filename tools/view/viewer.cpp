@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/stereo.hpp"
 
 namespace ptz::tools {
 namespace {

@@ -5,7 +5,7 @@
 #include <random>
 
 #include "perception/calibrate/ptz_calibration.hpp"
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/stereo.hpp"
 #include "support/board_views.hpp"
 
 namespace {

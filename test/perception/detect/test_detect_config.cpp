@@ -4,7 +4,7 @@
 
 #include <fstream>
 
-#include "perception/detect/detector.hpp"
+#include "perception/detection/detector.hpp"
 #include "support/error_of.hpp"
 #include "support/run_program.hpp"
 

@@ -1,4 +1,4 @@
-// Pyramid full scans (perception/detect/pyramid.hpp): at 1080p the reduced image's candidates,
+// Pyramid full scans (perception/detection/pyramid.hpp): at 1080p the reduced image's candidates,
 // detected at full resolution in windows around them, give exactly a full-resolution full scan's
 // regions (rendered default scenario, JPEG and raw); a region its window cuts grows the window,
 // then falls back to a full-resolution scan; an object too small for the reduced image is the
@@ -11,10 +11,10 @@
 #include <cmath>
 #include <memory>
 
-#include "perception/detect/detector.hpp"
-#include "perception/detect/jpeg_window.hpp"
-#include "perception/detect/pyramid.hpp"
-#include "perception/detect/windows.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/pyramid.hpp"
+#include "perception/detection/windows.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
 

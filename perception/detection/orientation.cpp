@@ -1,4 +1,4 @@
-#include "perception/detect/orientation.hpp"
+#include "perception/detection/orientation.hpp"
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <vector>
+
+#include "perception/tracking/yaw.hpp"
 
 namespace ptz::perception {
 namespace {
@@ -258,16 +260,6 @@ class Fitter {
 };
 
 }  // namespace
-
-double wrapAngle(double d, double period) {
-  d = std::fmod(d + period / 2, period);
-  if (d < 0) d += period;
-  return d - period / 2;
-}
-
-Eigen::Vector4d yawQuaternionWxyz(double yaw_rad) {
-  return {std::cos(yaw_rad / 2), 0.0, std::sin(yaw_rad / 2), 0.0};
-}
 
 bool classHasOrientation(const ColorClass& c) {
   return c.shape != "circle";

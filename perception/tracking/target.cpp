@@ -1,4 +1,4 @@
-#include "perception/detect/target.hpp"
+#include "perception/tracking/target.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "perception/detect/jpeg_restart.hpp"
+#include "perception/jpeg/jpeg_restart.hpp"
 
 namespace ptz::perception {
 

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <random>
 
-#include "perception/detect/stereo.hpp"
-#include "perception/detect/target.hpp"
-#include "perception/detect/tracker.hpp"
+#include "perception/detection/stereo.hpp"
+#include "perception/tracking/target.hpp"
+#include "perception/tracking/tracker.hpp"
 
 using ptz::Side;
 using ptz::StereoRig;

@@ -1,8 +1,8 @@
-#include "perception/detect/pyramid.hpp"
+#include "perception/detection/pyramid.hpp"
 
 #include <opencv2/imgproc.hpp>
 
-#include "perception/detect/windows.hpp"
+#include "perception/detection/windows.hpp"
 
 namespace ptz::perception {
 

@@ -10,11 +10,11 @@
 #include <random>
 
 #include "common/transport/transport.hpp"
-#include "perception/detect/detector.hpp"
-#include "perception/detect/jpeg_window.hpp"
-#include "perception/detect/stereo.hpp"
-#include "perception/detect/tracker.hpp"
-#include "perception/detect/windows.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/stereo.hpp"
+#include "perception/detection/windows.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
+#include "perception/tracking/tracker.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
 

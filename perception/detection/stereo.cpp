@@ -1,4 +1,4 @@
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/stereo.hpp"
 
 #include <opencv2/calib3d.hpp>
 

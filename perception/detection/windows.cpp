@@ -1,4 +1,4 @@
-#include "perception/detect/windows.hpp"
+#include "perception/detection/windows.hpp"
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "perception/detect/pyramid.hpp"
+#include "perception/detection/pyramid.hpp"
 
 namespace ptz::perception {
 

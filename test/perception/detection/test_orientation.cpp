@@ -8,9 +8,10 @@
 #include <cstdio>
 #include <random>
 
-#include "perception/detect/detector.hpp"
-#include "perception/detect/orientation.hpp"
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/orientation.hpp"
+#include "perception/detection/stereo.hpp"
+#include "perception/tracking/yaw.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
 

@@ -13,7 +13,7 @@
 #include <opencv2/core.hpp>
 
 #include "common/rig.hpp"
-#include "perception/detect/detector.hpp"
+#include "perception/detection/detector.hpp"
 
 namespace ptz::perception {
 
@@ -74,11 +74,5 @@ struct BoxYaw {
 // The yaw of the box centred near centre_head_m (triangulated) seen in both views.
 BoxYaw estimateBoxYaw(const BoxView& left, const BoxView& right,
                       const Eigen::Vector3d& centre_head_m, const OrientationParams& params = {});
-
-// a - b wrapped into [-period/2, period/2).
-double wrapAngle(double a_minus_b, double period);
-
-// The rotation head <- box of a yaw about the head's y axis, as (w, x, y, z).
-Eigen::Vector4d yawQuaternionWxyz(double yaw_rad);
 
 }  // namespace ptz::perception

@@ -1,4 +1,4 @@
-#include "perception/detect/jpeg_restart.hpp"
+#include "perception/jpeg/jpeg_restart.hpp"
 
 #include <algorithm>
 #include <cstring>

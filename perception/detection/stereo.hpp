@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "common/rig.hpp"
-#include "perception/detect/detector.hpp"
-#include "perception/detect/tracker.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/tracking/tracker.hpp"
 
 namespace ptz::perception {
 

@@ -1,4 +1,4 @@
-// Windows of a JPEG decoded from its restart segments (perception/detect/jpeg_restart.hpp): the
+// Windows of a JPEG decoded from its restart segments (perception/jpeg/jpeg_restart.hpp): the
 // pixels of cv::imdecode's full decode exactly, at VGA and 1080p, 4:2:0 and 4:4:4, restart markers
 // at every MCU row, every second row and off the rows; encodeImage's JPEGs take that path; damaged
 // restart data takes the whole-stream path or decodes as it would (never a crash).
@@ -12,7 +12,7 @@
 #include <random>
 
 #include "common/transport/transport.hpp"
-#include "perception/detect/jpeg_window.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
 

@@ -1,6 +1,4 @@
-#include "perception/detect/tracker.hpp"
-
-#include "perception/detect/orientation.hpp"
+#include "perception/tracking/tracker.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -8,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <tuple>
+
+#include "perception/tracking/yaw.hpp"
 
 namespace ptz::perception {
 namespace {

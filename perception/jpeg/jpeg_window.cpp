@@ -1,4 +1,4 @@
-#include "perception/detect/jpeg_window.hpp"
+#include "perception/jpeg/jpeg_window.hpp"
 
 #include <jpeglib.h>
 

@@ -1,4 +1,4 @@
-#include "perception/detect/detector.hpp"
+#include "perception/detection/detector.hpp"
 
 #include <opencv2/imgproc.hpp>
 

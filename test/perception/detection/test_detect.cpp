@@ -7,8 +7,8 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "perception/detect/detector.hpp"
-#include "perception/detect/stereo.hpp"
+#include "perception/detection/detector.hpp"
+#include "perception/detection/stereo.hpp"
 #include "sim/simulator.hpp"
 #include "support/data_dir.hpp"
 #include "support/detect_scene.hpp"

@@ -10,7 +10,7 @@
 
 #include <vector>
 
-#include "perception/detect/detector.hpp"
+#include "perception/detection/detector.hpp"
 
 namespace ptz::perception {
 

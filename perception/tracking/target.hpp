@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
-#include "perception/detect/tracker.hpp"
+#include "perception/tracking/tracker.hpp"
 
 namespace ptz::perception {
 

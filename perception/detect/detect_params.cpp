@@ -1,0 +1,158 @@
+#include "perception/detect/detect_params.hpp"
+
+#include "common/freshness.hpp"
+
+namespace ptz::perception {
+
+void declareDetectParams(Params& p) {
+  p.add("target_class", "red_ball",
+        "class of the object of interest until TARGET_SELECT says otherwise");
+  p.add("filter_size_px", 3, "px", "median filter size (odd)", Range::between(1, 99));
+  p.add("morph_size_px", 3, "px", "opening/closing kernel size", Range::between(1, 99));
+  p.add("max_epipolar_px", 3.0, "px",
+        "largest distance of a left/right match from its epipolar line", Range::above(0));
+  p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match", Range::atLeast(1));
+  p.add("pixel_sigma_px", 0.3, "px", "centroid noise for the pose covariance", Range::above(0));
+  p.add("min_range_m", 0.3, "m", "nearest accepted object", Range::above(0));
+  p.add("max_range_m", 50.0, "m", "farthest accepted object", Range::above(0));
+  p.addOrder("min_range_m", "max_range_m");
+  p.add("orientation", true,
+        "estimate the yaw of objects whose class is not round (boxes) from both views' outlines");
+  p.add("orientation_height_ratio", OrientationParams{}.height_ratio, "",
+        "orientation: the boxes' height over their footprint's side (0: fitted)",
+        Range::between(0, 100));
+  p.add("orientation_margin_px", 8, "px", "orientation: crop around a box's region",
+        Range::between(1, 256));
+  p.add("orientation_max_per_frame", 4, "",
+        "orientation: boxes fitted per frame at most (the nearest the image centres first; the "
+        "rest counted orientations_skipped)",
+        Range::between(0, 64));
+  addFreshnessParams(p, "frame", 500.0, "a STEREO_FRAME");
+  addFreshnessParams(p, "select", 2000.0, "a TARGET_SELECT request");
+  const TrackerParams t;
+  p.add("track_yaw_psd_rad2_s", t.yaw_psd_rad2_s, "rad^2/s",
+        "tracks: a box's yaw is a random walk of this power spectral density", Range::above(0));
+  p.add("track_yaw_gate_chi2", t.yaw_gate_chi2, "",
+        "tracks: a measured yaw beyond this innovation^2 / variance is refused (1 dof)",
+        Range::above(0));
+  p.add("track_jerk_psd_m2_s5", t.jerk_psd_m2_s5, "m^2/s^5",
+        "tracks: spectral density of the objects' jerk (constant-acceleration model)",
+        Range::above(0));
+  p.add("track_gate_chi2", t.gate_chi2, "",
+        "tracks: a measurement farther from a track's prediction (Mahalanobis^2) is not its",
+        Range::above(0));
+  p.add("track_min_position_sigma_m", t.min_position_sigma_m, "m",
+        "tracks: noise added to every triangulated position", Range::atLeast(0));
+  p.add("track_confirm_hits", t.confirm_hits, "", "tracks: measurements that confirm a track",
+        Range::between(1, 1000));
+  p.add("track_tentative_max_gap_s", t.tentative_max_gap_s, "s",
+        "tracks: an unconfirmed track unseen this long is deleted", Range::above(0));
+  p.add("track_coast_s", t.coast_s, "s",
+        "tracks: a confirmed track unseen this long is deleted (it coasts until then)",
+        Range::above(0));
+  p.add("track_recover_speed_m_s", t.recover_speed_m_s, "m/s",
+        "tracks: a measurement outside every gate but within this speed times the time since a "
+        "coasting track's last update restarts that track (sharp turns; 0: off)",
+        Range::atLeast(0));
+  p.add("track_rank_sigma_cap_m", t.rank_sigma_cap_m, "m",
+        "tracks: pairs rank by Mahalanobis^2 + ln det S, det S capped at this sigma per axis",
+        Range::above(0));
+  p.add("track_max_radius_ratio", t.max_radius_ratio, "",
+        "tracks: a radius off the track's by more than this factor is not trusted as the centre",
+        Range::above(1));
+  p.add("trusted_area_ratio", 1.3, "",
+        "left/right area ratio (zoom-corrected) beyond which an object is not trusted as a centre",
+        Range::above(1));
+  p.add("pick_radius_px", 15.0, "px",
+        "TARGET_SELECT by image point: the largest distance from a track's image", Range::above(0));
+  const WindowParams w;
+  p.add("windows", w.enabled,
+        "with a confirmed track, scan windows around each track's predicted image (and a band of "
+        "the image a frame, or the whole frame every window_full_scan_every frames, for new "
+        "objects) instead of whole frames");
+  p.add("window_full_scan_every", w.full_scan_every, "frames",
+        "windows: every n-th frame is scanned whole, for new objects (1: every frame); with "
+        "window_full_scan_in_bands, the image is scanned in this many bands, one a frame",
+        Range::between(1, 1000));
+  p.add("window_full_scan_in_bands", w.full_scan_in_bands,
+        "windows: look for new objects in one band of the image's rows a frame instead of the "
+        "whole image every window_full_scan_every frames (no frame costs a whole scan)");
+  p.add("window_band_overlap_fraction", w.band_overlap_fraction, "",
+        "windows, bands: how far (a fraction of the image's height) each band reaches into its "
+        "neighbours: the tallest object sure to be whole in a band, and the largest vertical "
+        "disparity at which both images' band holds it",
+        Range::between(0, 1));
+  p.add("window_margin_px", w.margin_px, "px",
+        "windows: added on each side of a track's projected extent", Range::between(0, 4096));
+  p.add("window_sigma_scale", w.sigma_scale, "",
+        "windows: a track's extent is its radius plus this many sigma of its predicted position",
+        Range::between(0, 100));
+  p.add("full_scan_max_width_px", w.full_scan_max_width_px, "px",
+        "full scans of wider images find their objects on the image reduced by 2, 4 or 8 (to this "
+        "width or less), then detect at full resolution only around them (0: off)",
+        Range::between(0, 4096));
+  p.addSection("classes",
+               "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
+               "intensity_min, intensity_max, shape: circle|square|any, "
+               "max_shape_distance, max_elongation, min_area_px2, max_area_px2}");
+}
+
+TrackerParams trackerParams(const Params& p) {
+  TrackerParams t;
+  t.jerk_psd_m2_s5 = p.getDouble("track_jerk_psd_m2_s5");
+  t.gate_chi2 = p.getDouble("track_gate_chi2");
+  t.min_position_sigma_m = p.getDouble("track_min_position_sigma_m");
+  t.confirm_hits = p.getInt("track_confirm_hits");
+  t.tentative_max_gap_s = p.getDouble("track_tentative_max_gap_s");
+  t.coast_s = p.getDouble("track_coast_s");
+  t.max_radius_ratio = p.getDouble("track_max_radius_ratio");
+  t.recover_speed_m_s = p.getDouble("track_recover_speed_m_s");
+  t.rank_sigma_cap_m = p.getDouble("track_rank_sigma_cap_m");
+  t.yaw_psd_rad2_s = p.getDouble("track_yaw_psd_rad2_s");
+  t.yaw_gate_chi2 = p.getDouble("track_yaw_gate_chi2");
+  return t;
+}
+
+WindowParams windowParams(const Params& p) {
+  WindowParams w;
+  w.enabled = p.getBool("windows");
+  w.full_scan_every = p.getInt("window_full_scan_every");
+  w.full_scan_in_bands = p.getBool("window_full_scan_in_bands");
+  w.band_overlap_fraction = p.getDouble("window_band_overlap_fraction");
+  w.margin_px = p.getDouble("window_margin_px");
+  w.sigma_scale = p.getDouble("window_sigma_scale");
+  w.full_scan_max_width_px = p.getInt("full_scan_max_width_px");
+  return w;
+}
+
+DetectConfig DetectConfig::fromParams(const Params& p) {
+  if (p.configPath().empty()) {
+    throw ConfigError(
+        "--config FILE is required (it holds the colour classes; see "
+        "config/detect_default.yaml)");
+  }
+  DetectConfig c;
+  c.detector =
+      DetectorParams::fromConfig(p.section("classes"), "config file '" + p.configPath() + "'");
+  c.detector.filter_size_px = p.getInt("filter_size_px");
+  c.detector.morph_size_px = p.getInt("morph_size_px");
+  if (c.detector.filter_size_px % 2 == 0) throw p.invalid("filter_size_px", "must be odd");
+  checkTargetClass(p, c.detector);
+  c.target_class = p.getString("target_class");
+  c.stereo.max_epipolar_px = p.getDouble("max_epipolar_px");
+  c.stereo.max_area_ratio = p.getDouble("max_area_ratio");
+  c.stereo.pixel_sigma_px = p.getDouble("pixel_sigma_px");
+  c.stereo.min_range_m = p.getDouble("min_range_m");
+  c.stereo.max_range_m = p.getDouble("max_range_m");
+  c.tracker = trackerParams(p);
+  c.windows = windowParams(p);
+  c.pick_radius_px = p.getDouble("pick_radius_px");
+  c.trusted_area_ratio = p.getDouble("trusted_area_ratio");
+  c.orientation = p.getBool("orientation");
+  c.orientation_params.height_ratio = p.getDouble("orientation_height_ratio");
+  c.orientation_margin_px = p.getInt("orientation_margin_px");
+  c.orientation_max_per_frame = p.getInt("orientation_max_per_frame");
+  return c;
+}
+
+}  // namespace ptz::perception

@@ -1,0 +1,243 @@
+#include "perception/detect/detect_pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "common/measure.hpp"
+#include "perception/detect/detect_messages.hpp"
+#include "perception/detect/frame_pixels.hpp"
+
+namespace ptz::perception {
+namespace {
+
+std::vector<std::string> classNames(const DetectorParams& dp) {
+  std::vector<std::string> names;
+  for (const auto& c : dp.classes) names.push_back(c.name);
+  return names;
+}
+
+}  // namespace
+
+DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
+    : config_(std::move(config)),
+      rig_(std::move(rig)),
+      detector_(config_.detector),
+      tracker_(config_.tracker),
+      class_names_(classNames(detector_.params())),
+      selector_(config_.target_class, class_names_, config_.pick_radius_px),
+      windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()) {}
+
+bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
+                             std::string* why) {
+  const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
+  const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
+  const double t_s = m.utime * 1e-6;
+  const auto t0 = std::chrono::steady_clock::now();
+  // Windows around the tracks' predicted images, or the whole frames; decoding only what is
+  // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
+  ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
+  std::vector<Region> lr, rr;
+  FramePixels left_pixels(m.left), right_pixels(m.right);
+  if (!windows_.detect(detector_, &plan, left_pixels.pixels(), right_pixels.pixels(), &lr, &rr,
+                       why)) {
+    return false;
+  }
+  const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, config_.stereo);
+  std::vector<TrackMeasurement> measurements = trackMeasurements(
+      objects, lr, rr, lv, rv, class_names_, config_.trusted_area_ratio, tracker_.tracks(), t_s);
+  const std::vector<BoxYaw> yaws =
+      estimateYaws(m, {&left_pixels, &right_pixels}, objects, measurements, lr, rr, lv, rv);
+  for (TrackMeasurement& tm : measurements) {
+    if (tm.object_index < 0 || static_cast<size_t>(tm.object_index) >= yaws.size()) continue;
+    const BoxYaw& y = yaws[static_cast<size_t>(tm.object_index)];
+    tm.has_yaw = y.ok;
+    tm.yaw_rad = y.yaw_rad;
+    tm.yaw_var_rad2 = y.variance_rad2;
+  }
+  tracker_.update(t_s, measurements);
+  const int64_t target_id = chooseTarget(t_s, &out->target_reason_changed);
+  last_views_ = {lv, rv};
+  processing_ms_.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, lv, out);
+  setCounters(target_id, out->pose.target_index);
+  return true;
+}
+
+void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
+                                  const std::vector<Region>& lr, const std::vector<Region>& rr,
+                                  const std::vector<StereoObject>& objects,
+                                  const std::vector<BoxYaw>& yaws, const CameraView& lv,
+                                  FrameOutputs* out) const {
+  ptzstereo::object_detections_t& det = out->detections;
+  det = {};
+  det.utime = m.utime;
+  det.frame_seq = m.seq;
+  for (const auto& r : lr) det.left.push_back(toMessage(r, detector_.params()));
+  for (const auto& r : rr) det.right.push_back(toMessage(r, detector_.params()));
+  det.num_left = static_cast<int32_t>(det.left.size());
+  det.num_right = static_cast<int32_t>(det.right.size());
+
+  ptzstereo::object_pose_t& pose = out->pose;
+  pose = {};
+  pose.utime = m.utime;
+  pose.frame_seq = m.seq;
+  pose.target_index = -1;
+  pose.left_ptz = {m.left.pan_rad, m.left.tilt_rad, m.left.zoom};
+  pose.right_ptz = {m.right.pan_rad, m.right.tilt_rad, m.right.zoom};
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const StereoObject& o = objects[i];
+    det.left[static_cast<size_t>(o.left)].match_index = o.right;
+    det.right[static_cast<size_t>(o.right)].match_index = o.left;
+    pose.objects.push_back(
+        toMessage(o, class_names_[static_cast<size_t>(o.class_index)],
+                  objectRadiusM(lr[static_cast<size_t>(o.left)], o.position_head_m, lv), yaws[i]));
+  }
+  pose.num_objects = static_cast<int32_t>(pose.objects.size());
+  // The target's object: the measurement that updated the locked track in this frame.
+  if (const Track* target = tracker_.find(target_id)) pose.target_index = target->object_index;
+
+  ptzstereo::object_tracks_t& tracks = out->tracks;
+  tracks = {};
+  tracks.utime = m.utime;
+  tracks.frame_seq = m.seq;
+  tracks.left_ptz = pose.left_ptz;
+  tracks.right_ptz = pose.right_ptz;
+  tracks.target_id = target_id;
+  tracks.target_reason = selector_.reason();
+  for (const auto& t : tracker_.tracks()) {
+    tracks.tracks.push_back(toMessage(t, t_s, tracker_.params().yaw_psd_rad2_s));
+  }
+  tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
+}
+
+void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
+  counters_["tracks_live"] = static_cast<int64_t>(tracker_.tracks().size());
+  counters_["tracks_started"] = tracker_.tracksStarted();
+  counters_["tracks_recovered"] = tracker_.recoveries();
+  counters_["track_yaws_accepted"] = tracker_.yawsAccepted();
+  counters_["track_yaws_refused"] = tracker_.yawsRefused();
+  counters_["tracks_refused"] = tracker_.tracksRefused();
+  counters_["target_id"] = target_id;
+  for (const auto& [reason, n] : tracker_.untrustedCounts()) counters_["untrusted_" + reason] = n;
+  for (const auto& [name, n] : windows_.counts()) counters_[name] = n;
+  ++counters_["frames_processed"];
+  if (target_index < 0) ++counters_["frames_without_target"];
+  if (processing_ms_.size() >= 30) {
+    counters_["processing_us_p50"] = static_cast<int64_t>(percentile(processing_ms_, 50) * 1000);
+    counters_["processing_us_p99"] = static_cast<int64_t>(percentile(processing_ms_, 99) * 1000);
+    processing_ms_.clear();
+  }
+  if (orientation_us_.size() >= 30) {
+    counters_["orientation_us_p50"] = static_cast<int64_t>(percentile(orientation_us_, 50));
+    counters_["orientation_us_p99"] = static_cast<int64_t>(percentile(orientation_us_, 99));
+    orientation_us_.clear();
+  }
+}
+
+// A cut, merged or half-hidden region gives no yaw; nor does a region an image border cuts, or a
+// view that does not decode.
+std::vector<BoxYaw> DetectPipeline::estimateYaws(const ptzstereo::stereo_frame_t& m,
+                                                 const std::array<const FramePixels*, 2>& pixels,
+                                                 const std::vector<StereoObject>& objects,
+                                                 const std::vector<TrackMeasurement>& measurements,
+                                                 const std::vector<Region>& lr,
+                                                 const std::vector<Region>& rr,
+                                                 const CameraView& lv, const CameraView& rv) {
+  std::vector<BoxYaw> yaws(objects.size());
+  if (!config_.orientation) return yaws;
+  std::vector<bool> trusted(objects.size());
+  for (const TrackMeasurement& tm : measurements) {
+    if (tm.object_index >= 0 && static_cast<size_t>(tm.object_index) < objects.size()) {
+      trusted[static_cast<size_t>(tm.object_index)] = tm.untrusted.empty();
+    }
+  }
+  std::vector<std::pair<double, size_t>> boxes;  // distance from the image centre, index
+  for (size_t i = 0; i < objects.size(); ++i) {
+    const size_t ci = static_cast<size_t>(objects[i].class_index);
+    if (!trusted[i] || !classHasOrientation(detector_.params().classes[ci])) continue;
+    const cv::Point2d c = lr[static_cast<size_t>(objects[i].left)].centroid_px;
+    boxes.emplace_back(std::hypot(c.x - m.left.width / 2.0, c.y - m.left.height / 2.0), i);
+  }
+  std::sort(boxes.begin(), boxes.end());
+  const size_t most = static_cast<size_t>(config_.orientation_max_per_frame);
+  if (boxes.size() > most) {
+    counters_["orientations_skipped"] += static_cast<int64_t>(boxes.size() - most);
+    boxes.resize(most);
+  }
+  for (const auto& [distance_px, i] : boxes) {
+    const StereoObject& o = objects[i];
+    const size_t ci = static_cast<size_t>(o.class_index);
+    const Region& l = lr[static_cast<size_t>(o.left)];
+    const Region& r = rr[static_cast<size_t>(o.right)];
+    const cv::Size lsize(m.left.width, m.left.height), rsize(m.right.width, m.right.height);
+    const auto t0 = std::chrono::steady_clock::now();
+    cv::Mat lcrop, rcrop;
+    std::string why;
+    // Enough margin that the crop's pixels are the full scan's (the detector's filters).
+    const int margin_px = std::max(config_.orientation_margin_px, detector_.exactMarginPx());
+    const cv::Rect lc = boxCrop(l.bbox, lsize, margin_px);
+    const cv::Rect rc = boxCrop(r.bbox, rsize, margin_px);
+    bool lreused = false, rreused = false;
+    if (regionCut(l.bbox, lsize) || regionCut(r.bbox, rsize) ||
+        !pixels[0]->crop(lc, &lcrop, &lreused, &why) ||
+        !pixels[1]->crop(rc, &rcrop, &rreused, &why)) {
+      ++counters_["orientations_failed"];
+      continue;
+    }
+    counters_["orientation_views_decoded"] += (lreused ? 0 : 1) + (rreused ? 0 : 1);
+    yaws[i] = estimateBoxYaw(makeBoxView(detector_, ci, lcrop, lc.tl(), l.bbox, lv),
+                             makeBoxView(detector_, ci, rcrop, rc.tl(), r.bbox, rv),
+                             o.position_head_m, config_.orientation_params);
+    orientation_us_.push_back(
+        std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+    ++counters_[yaws[i].ok ? "orientations_estimated" : "orientations_failed"];
+  }
+  return yaws;
+}
+
+int64_t DetectPipeline::chooseTarget(double t_s, bool* reason_changed) {
+  const int64_t before = selector_.targetId();
+  const std::string reason_before = selector_.reason();
+  const int64_t id = selector_.choose(t_s, tracker_.tracks());
+  if (id != before) ++counters_["target_changes"];
+  *reason_changed = selector_.reason() != reason_before;
+  return id;
+}
+
+bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* why) {
+  TargetRequest r;
+  switch (m.mode) {
+    case ptzstereo::target_select_t::MODE_CLASS:
+      r.mode = TargetRequest::Mode::kClass;
+      r.class_name = m.class_name;
+      break;
+    case ptzstereo::target_select_t::MODE_TRACK_ID:
+      r.mode = TargetRequest::Mode::kTrackId;
+      r.track_id = m.track_id;
+      break;
+    case ptzstereo::target_select_t::MODE_IMAGE_POINT:
+      if (m.camera != ptzstereo::target_select_t::CAMERA_LEFT &&
+          m.camera != ptzstereo::target_select_t::CAMERA_RIGHT) {
+        *why = "camera " + std::to_string(m.camera) + " is neither 0 nor 1";
+        return false;
+      }
+      if (!last_views_) {
+        *why = "no frame seen yet";
+        return false;
+      }
+      r.mode = TargetRequest::Mode::kImagePoint;
+      r.camera = m.camera == ptzstereo::target_select_t::CAMERA_LEFT ? Side::kLeft : Side::kRight;
+      r.pixel = {m.x_px, m.y_px};
+      break;
+    default:
+      *why = "mode " + std::to_string(m.mode) + " is none of 0, 1, 2";
+      return false;
+  }
+  const CameraView none;
+  return selector_.request(r, tracker_.tracks(), last_views_ ? last_views_->first : none,
+                           last_views_ ? last_views_->second : none, why);
+}
+
+}  // namespace ptz::perception

@@ -1,0 +1,98 @@
+// ptz-detect's work on a frame (no LCM): the images decoded as far as they are scanned (windows
+// around the tracks' predicted images, a band or the whole image), both images' regions, their
+// stereo pairs triangulated, the boxes' yaws, the tracker's update and the target's choice, as the
+// three messages ptz-detect publishes; and TARGET_SELECT requests. The main checks what comes in
+// (FrameIntake, FreshnessGate), publishes what comes out and copies counters() into its status.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/rig.hpp"
+#include "perception/detect/detect_params.hpp"
+#include "perception/tracking/target.hpp"
+#include "ptzstereo/object_detections_t.hpp"
+#include "ptzstereo/object_pose_t.hpp"
+#include "ptzstereo/object_tracks_t.hpp"
+#include "ptzstereo/stereo_frame_t.hpp"
+#include "ptzstereo/target_select_t.hpp"
+
+namespace ptz::perception {
+
+class FramePixels;
+
+// One frame's messages, each carrying the frame's utime and seq (publish_utime left 0).
+struct FrameOutputs {
+  ptzstereo::object_detections_t detections;
+  // target_index: the object that updated the locked track in this frame (-1: none).
+  ptzstereo::object_pose_t pose;
+  ptzstereo::object_tracks_t tracks;
+  // The target's reason changed in this frame (ptz-detect says the new one on stderr).
+  bool target_reason_changed = false;
+};
+
+class DetectPipeline {
+ public:
+  // rig: the frames' rig (its image size is theirs).
+  DetectPipeline(DetectConfig config, StereoRig rig);
+
+  // One frame, accepted already (checkStereoFrame; checkFrameMatchesRig: the rig's size, in
+  // colour): its messages in *out. False and *why when an image does not decode (the frame is
+  // dropped; the tracks and the target are as before it).
+  bool process(const ptzstereo::stereo_frame_t& frame, FrameOutputs* out, std::string* why);
+
+  // A TARGET_SELECT request (fresh: the main judged it) against the tracks and the views of the
+  // newest frame processed. False and *why when it cannot be met: an unknown class, track or
+  // mode, a camera neither left nor right, a point on no track or before any frame; the target
+  // then stays.
+  bool select(const ptzstereo::target_select_t& request, std::string* why);
+
+  int64_t targetId() const { return selector_.targetId(); }
+  const std::string& targetReason() const { return selector_.reason(); }
+  const Tracker& tracker() const { return tracker_; }
+
+  // The counters of PROCESS_STATUS_PTZ_DETECT, by name, as of the newest frame processed (totals
+  // since the start and the latest values): frames_processed, frames_without_target, target_id,
+  // target_changes, tracks_live, tracks_started, tracks_recovered, tracks_refused,
+  // track_yaws_accepted, track_yaws_refused, untrusted_<reason>, the windows' (WindowScanner::
+  // counts), orientations_estimated, _failed, _skipped, orientation_views_decoded, and every 30
+  // frames (boxes) processing_us_p50/_p99 (orientation_us_p50/_p99).
+  const std::map<std::string, int64_t>& counters() const { return counters_; }
+
+ private:
+  // The yaw of each trusted box (by object; not ok for the others), at most
+  // orientation_max_per_frame of them, nearest the left image's centre first.
+  std::vector<BoxYaw> estimateYaws(const ptzstereo::stereo_frame_t& m,
+                                   const std::array<const FramePixels*, 2>& pixels,
+                                   const std::vector<StereoObject>& objects,
+                                   const std::vector<TrackMeasurement>& measurements,
+                                   const std::vector<Region>& lr, const std::vector<Region>& rr,
+                                   const CameraView& lv, const CameraView& rv);
+  // The selector's choice after this frame's tracker update; *reason_changed when its reason did.
+  int64_t chooseTarget(double t_s, bool* reason_changed);
+  // The three messages of a processed frame.
+  void makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
+                    const std::vector<Region>& lr, const std::vector<Region>& rr,
+                    const std::vector<StereoObject>& objects, const std::vector<BoxYaw>& yaws,
+                    const CameraView& lv, FrameOutputs* out) const;
+  void setCounters(int64_t target_id, int64_t target_index);
+
+  DetectConfig config_;
+  StereoRig rig_;
+  Detector detector_;
+  Tracker tracker_;
+  std::vector<std::string> class_names_;  // the detector's, by class index
+  TargetSelector selector_;
+  WindowScanner windows_;
+  std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
+  std::vector<double> processing_ms_;
+  std::vector<double> orientation_us_;
+  std::map<std::string, int64_t> counters_;
+};
+
+}  // namespace ptz::perception
