@@ -63,6 +63,9 @@ class SimNode {
         run_.advanceWithStates(t_frame);
       } else if (!run_.waitForFrame(t_frame, serve_)) {
         status_.increment("frames_skipped_late");
+        log_.warn("late", "ptz-sim: frame " + std::to_string(n) +
+                              " skipped: rendering falls behind the frame rate (" +
+                              formatNumber(1.0 / frame_period_s) + " Hz)");
         continue;
       }
       publishFrame();
@@ -75,8 +78,9 @@ class SimNode {
     if (visca_) visca_->stop();
     reportVisca();
     status_.publishLast();
-    std::printf("ptz-sim: %lld frames published, %lld setpoints applied\n",
+    std::printf("ptz-sim: %lld frames published, %lld skipped late, %lld setpoints applied\n",
                 static_cast<long long>(status_.counter("frames_published")),
+                static_cast<long long>(status_.counter("frames_skipped_late")),
                 static_cast<long long>(status_.counter("setpoints_applied")));
     return 0;
   }

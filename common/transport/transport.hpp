@@ -173,6 +173,11 @@ class StatusReporter {
   void countDropped(const std::string& channel, const std::string& reason, int64_t n = 1);
   void increment(const std::string& counter, int64_t by = 1);
   void setCounter(const std::string& counter, int64_t value);
+  // Every (name, value) of counters: what a process's library reports after each message.
+  template <class Counters>
+  void setCounters(const Counters& counters) {
+    for (const auto& [name, value] : counters) setCounter(name, value);
+  }
   // Once samples_ms holds at least min_samples: counters NAME_us_p50 and NAME_us_p99 (in
   // microseconds), and the samples start over.
   void setPercentilesUs(const std::string& name, std::vector<double>* samples_ms,

@@ -74,7 +74,7 @@ class ControlNode {
   void monitorDelay(double delay_s) {
     const std::optional<DelayMonitor::Status> d = delay_monitor_.feed(delay_s);
     if (!d) return;
-    for (const auto& [counter, value] : d->counters) status_.setCounter(counter, value);
+    status_.setCounters(d->counters);
     if (d->warning.empty()) {
       status_.setState(ptzstereo::process_status_t::STATE_OK, "");
       return;

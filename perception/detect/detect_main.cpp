@@ -69,7 +69,7 @@ class DetectNode {
     publish(ch_tracks_, &out.tracks);
     publish(ch_pose_, &out.pose);
     publish(ch_detections_, &out.detections);
-    for (const auto& [name, value] : pipeline_.counters()) status_.setCounter(name, value);
+    status_.setCounters(pipeline_.counters());
   }
 
   template <class Msg>

@@ -131,7 +131,7 @@ class CameraNode {
     std::string message;
     Health h = camera_->health(now, &message);
     if (trigger_) trigger_->report(now, &counters, &edge_late_ms_, &h, &message);
-    for (const auto& [name, value] : counters) status_.setCounter(name, value);
+    status_.setCounters(counters);
     // How late the trigger's edges came after their periods' starts; from the first frame of a
     // pair arriving to its publication, and of that how long it was held for a PTZ_STATE.
     if (trigger_) status_.setPercentilesUs("trigger_late", &edge_late_ms_, 30);

@@ -100,7 +100,7 @@ class DriverNode {
     for (const auto& e : r.head_errors) log_.warn("head_error", "ptz-driver: head error: " + e);
     rtt_ms_.insert(rtt_ms_.end(), r.round_trip_ms.begin(), r.round_trip_ms.end());
     status_.setPercentilesUs("head_round_trip", &rtt_ms_, 50);
-    for (const auto& [name, value] : r.counters) status_.setCounter(name, value);
+    status_.setCounters(r.counters);
     status_.setState(r.state, r.message);
   }
 

@@ -5,6 +5,7 @@
 
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "common/config.hpp"
 #include "common/transport/transport.hpp"
@@ -324,4 +325,12 @@ TEST(RateSchedule, TakesTheRateOnAverageAndRestarts) {
   EXPECT_FALSE(s.take(t0 + 60'100'000));
   EXPECT_TRUE(s.take(t0 + 60'200'000));
   EXPECT_FALSE(ptz::RateSchedule(0).take(t0));
+}
+
+TEST_F(Edge, SetCountersTakesAMapOrAListOfPairs) {
+  status.setCounters(std::map<std::string, int64_t>{{"a", 1}, {"b", -2}});
+  status.setCounters(std::vector<std::pair<std::string, int64_t>>{{"b", 7}, {"c", 3}});
+  EXPECT_EQ(status.counter("a"), 1);
+  EXPECT_EQ(status.counter("b"), 7);
+  EXPECT_EQ(status.counter("c"), 3);
 }

@@ -242,7 +242,8 @@ TEST(SimProcess, StampsFollowAStepOfTheWallClock) {
   const std::string lib = have ? found.gl_pathv[0] : "";
   globfree(&found);
   if (!have) {
-    if (ptz::test::skipAllowed()) GTEST_SKIP() << "libfaketime.so.1 absent (Debian's libfaketime)";
+    if (ptz::test::skipAllowed())
+      GTEST_SKIP() << "libfaketime.so.1 absent: apt install libfaketime (scripts/install-deps)";
     FAIL() << "libfaketime.so.1 absent in CI (scripts/install-deps installs libfaketime)";
   }
   char dir[] = "/tmp/ptz_faketime_XXXXXX";

@@ -168,7 +168,7 @@ class BridgeNode {
 
  private:
   void updateCounters() {
-    for (const auto& [name, n] : bridge_.counters()) status_.setCounter(name, n);
+    status_.setCounters(bridge_.counters());
     std::vector<std::string> reasons;
     for (const auto& [channel, n] : bridge_.takeNewDrops(&reasons)) {
       status_.countDropped(channel, "unconvertible", n);
