@@ -41,7 +41,7 @@ ptz_bin() {
 # Debian 12 / Ubuntu packages: what builds and runs the programs (scripts/demo installs only
 # these, ccache included), then what the tests, fuzz targets and tools for them add.
 PTZ_DEMO_PACKAGES=(
-  build-essential cmake pkg-config ccache
+  build-essential cmake pkg-config ccache ninja-build
   liblcm-dev liblcm-bin libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev
   libgpiod-dev libsystemd-dev libjpeg-dev
@@ -64,6 +64,8 @@ PTZ_PACKAGES=(
   libgstrtspserver-1.0-dev
   gstreamer1.0-tools
   nftables xvfb x11-apps imagemagick xdotool
+  # cpack -G DEB (test/deploy): its shared-library dependencies are read with file
+  file
 )
 
 ptz_sudo() {
@@ -107,10 +109,21 @@ ptz_install_node() {
   ptz_sudo env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends nodejs npm
 }
 
+# ptz_generator: the CMake generator flag for a new build dir (Ninja where installed: it keeps both
+# cores busy across targets, where make builds one target's files at a time); nothing for a build
+# dir that exists, which keeps its own.
+ptz_generator() {
+  if [ ! -f "$PTZ_BUILD/CMakeCache.txt" ] && command -v ninja >/dev/null; then
+    echo "-GNinja"
+  fi
+}
+
 # ptz_build [CMAKE_ARGS...]: configures and builds everything.
 ptz_build() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0  # nothing to build: the programs are installed
-  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" >/dev/null
+  # shellcheck disable=SC2046  # the generator is one word or none
+  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" $(ptz_generator) -DCMAKE_BUILD_TYPE=RelWithDebInfo "$@" \
+    >/dev/null
   cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)"
 }
 
@@ -120,11 +133,13 @@ ptz_build() {
 # them keeps them.
 ptz_build_programs() {
   [ "$PTZ_INSTALLED" = 0 ] || return 0
-  local testing=()
+  local testing=() generator
+  generator=$(ptz_generator)
   [ -f "$PTZ_BUILD/CMakeCache.txt" ] || testing=(-DBUILD_TESTING=OFF)
   # Explicit returns: callers run this inside `if`, where set -e does not act.
-  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo "${testing[@]}" >/dev/null ||
-    return 1
+  # shellcheck disable=SC2086  # the generator is one word or none
+  cmake -S "$PTZ_ROOT" -B "$PTZ_BUILD" $generator -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "${testing[@]}" >/dev/null || return 1
   cmake --build "$PTZ_BUILD" -j"$(ptz_jobs)" --target "$@" || return 1
 }
 
