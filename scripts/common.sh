@@ -45,6 +45,8 @@ PTZ_DEMO_PACKAGES=(
   liblcm-dev liblcm-bin libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev
   libgpiod-dev libsystemd-dev libjpeg-dev
+  # ONVIF cameras: SOAP parsed by libxml2, WS-Security digests by OpenSSL, HTTP by libcurl
+  libxml2-dev libssl-dev libcurl4-openssl-dev
   # Foxglove: MCAP export (JSON messages, zstd chunks) and the WebSocket bridge
   nlohmann-json3-dev libzstd-dev zlib1g-dev libwebsocketpp-dev libasio-dev
   # ptz-report's plots; the demo's private network
