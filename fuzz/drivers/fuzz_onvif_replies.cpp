@@ -1,9 +1,9 @@
 // What ptz-driver's ONVIF client reads from a camera: the input as the body of every reply
-// (device, media, PTZ; openReply's fault path) and as the text of the number and duration
-// readers. Properties: only a Result comes back (nothing throws); a refusal says why in at most
-// 4 kB; accepted values are within what the parsers promise (finite numbers in range, tokens and
-// names short, URLs of their scheme, Min <= Max); a number read back from its printed form is
-// the same double.
+// (device, media, PTZ, WS-Discovery's ProbeMatches; openReply's fault path) and as the text of the
+// number and duration readers. Properties: only a Result comes back (nothing throws); a refusal
+// says why in at most 4 kB; accepted values are within what the parsers promise (finite numbers in
+// range, tokens and names short, URLs of their scheme, Min <= Max); a number read back from its
+// printed form is the same double.
 #include <cmath>
 #include <string>
 #include <string_view>
@@ -124,6 +124,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (const auto t = onvif::parseSetPreset(in); accepted(t)) {
     FUZZ_CHECK(!t->empty(), "empty preset token");
     checkText(*t, onvif::kMaxTokenChars, "preset token");
+  }
+  if (const auto m = onvif::parseProbeMatches(in, ""); accepted(m)) {
+    FUZZ_CHECK(m->size() <= onvif::kMaxListItems, "match count");
+    for (const onvif::ProbeMatch& match : *m) {
+      FUZZ_CHECK(!match.xaddrs.empty() && match.xaddrs.size() <= onvif::kMaxListItems &&
+                     match.scopes.size() <= onvif::kMaxListItems,
+                 "list sizes");
+      for (const std::string& x : match.xaddrs) checkUrl(x, "XAddr");
+      for (const std::string& scope : match.scopes) {
+        FUZZ_CHECK(!scope.empty() && scope.find(' ') == std::string::npos, "scope");
+        checkText(scope, onvif::kMaxNameChars, "scope");
+      }
+    }
   }
   const auto fault = onvif::openReply(in, "StopResponse", onvif::kPtzNs);
   if (!accepted(fault) && fault.fault()) {

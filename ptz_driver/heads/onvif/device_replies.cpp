@@ -1,5 +1,6 @@
 #include "ptz_driver/heads/onvif/device_replies.hpp"
 
+#include <algorithm>
 #include <ctime>
 
 namespace ptz::onvif {
@@ -187,6 +188,77 @@ Result<std::string> parseStreamUri(std::string_view reply) {
   const XmlNode uri = r->response.find({"MediaUri", "Uri"});
   if (!uri.valid()) return Error{"MediaUri/Uri: missing", std::nullopt};
   return readUrl(uri.text(), "MediaUri/Uri", {"rtsp://", "rtsps://"});
+}
+
+namespace {
+
+// A whitespace-separated list (xs:list), each item checked.
+Result<std::vector<std::string>> readList(std::string_view text, const std::string& field,
+                                          std::size_t max_chars) {
+  std::vector<std::string> items;
+  std::size_t at = 0;
+  while (true) {
+    at = text.find_first_not_of(" \t\r\n", at);
+    if (at == std::string_view::npos) break;
+    const std::size_t end = std::min(text.find_first_of(" \t\r\n", at), text.size());
+    if (items.size() == kMaxListItems) {
+      return Error{field + ": more than " + std::to_string(kMaxListItems) + " items", std::nullopt};
+    }
+    Result<std::string> item = readText(text.substr(at, end - at), field, max_chars);
+    if (!item) return item.fullError();
+    items.push_back(std::move(item.value()));
+    at = end;
+  }
+  return items;
+}
+
+}  // namespace
+
+Result<std::vector<ProbeMatch>> parseProbeMatches(std::string_view reply,
+                                                  std::string_view message_id) {
+  const Result<SoapReply> r = openReply(reply, "ProbeMatches", kDiscoveryNs);
+  if (!r) return r.fullError();
+  if (!message_id.empty()) {
+    const std::string relates_to = r->doc.root().find({"Header", "RelatesTo"}).text();
+    if (relates_to != message_id) {
+      return Error{"Header/RelatesTo '" + relates_to.substr(0, 64) + "': not our Probe's " +
+                       std::string(message_id),
+                   std::nullopt};
+    }
+  }
+  const std::vector<XmlNode> nodes = r->response.children("ProbeMatch");
+  if (nodes.size() > kMaxListItems) {
+    return Error{"ProbeMatch: " + std::to_string(nodes.size()) + " matches", std::nullopt};
+  }
+  std::vector<ProbeMatch> matches;
+  for (const XmlNode& n : nodes) {
+    ProbeMatch m;
+    const Result<std::string> endpoint =
+        readText(n.find({"EndpointReference", "Address"}).text(),
+                 "ProbeMatch/EndpointReference/Address", kMaxNameChars);
+    if (!endpoint) return endpoint.fullError();
+    m.endpoint = *endpoint;
+    const std::string where = "ProbeMatch '" + m.endpoint + "' ";
+    Result<std::vector<std::string>> types =
+        readList(n.child("Types").text(), where + "Types", kMaxNameChars);
+    if (!types) return types.fullError();
+    m.types = std::move(types.value());
+    Result<std::vector<std::string>> scopes =
+        readList(n.child("Scopes").text(), where + "Scopes", kMaxNameChars);
+    if (!scopes) return scopes.fullError();
+    m.scopes = std::move(scopes.value());
+    Result<std::vector<std::string>> xaddrs =
+        readList(n.child("XAddrs").text(), where + "XAddrs", kMaxUrlChars);
+    if (!xaddrs) return xaddrs.fullError();
+    for (const std::string& x : *xaddrs) {
+      const Result<std::string> url = readUrl(x, where + "XAddrs", {"http://", "https://"});
+      if (!url) return url.fullError();
+    }
+    if (xaddrs->empty()) return Error{where + "XAddrs: none", std::nullopt};
+    m.xaddrs = std::move(xaddrs.value());
+    matches.push_back(std::move(m));
+  }
+  return matches;
 }
 
 }  // namespace ptz::onvif

@@ -45,6 +45,19 @@ Result<std::vector<MediaProfile>> parseProfiles(std::string_view reply);
 // GetStreamUri: an rtsp:// (or rtsps://) URL.
 Result<std::string> parseStreamUri(std::string_view reply);
 
+// WS-Discovery ProbeMatches (answering probeMessage(message_id), requests.hpp): each device's
+// endpoint (urn:uuid:…), Types, Scopes (onvif://www.onvif.org/…) and XAddrs (device service
+// URLs). A reply relating to another message is refused; empty message_id: not checked.
+struct ProbeMatch {
+  std::string endpoint;
+  std::vector<std::string> types;
+  std::vector<std::string> scopes;
+  std::vector<std::string> xaddrs;
+};
+constexpr std::size_t kMaxListItems = 64;
+Result<std::vector<ProbeMatch>> parseProbeMatches(std::string_view reply,
+                                                  std::string_view message_id);
+
 // Shared by the readers: an http(s) URL of at most kMaxUrlChars, no spaces or control characters.
 Result<std::string> readUrl(std::string_view text, std::string_view field,
                             std::initializer_list<std::string_view> schemes);

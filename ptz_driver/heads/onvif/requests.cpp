@@ -1,6 +1,9 @@
 #include "ptz_driver/heads/onvif/requests.hpp"
 
+#include <cstdio>
+
 #include "ptz_driver/heads/onvif/soap.hpp"
+#include "ptz_driver/heads/onvif/ws_security.hpp"
 #include "ptz_driver/heads/onvif/xml.hpp"
 
 namespace ptz::onvif {
@@ -121,6 +124,34 @@ Request setPreset(std::string_view profile_token, std::string_view preset_name,
              profile(profile_token) +
                  (preset_name.empty() ? "" : element("tptz:PresetName", preset_name)) +
                  (preset_token.empty() ? "" : element("tptz:PresetToken", preset_token)));
+}
+
+std::string probeMessage(std::string_view message_id) {
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?><s:Envelope xmlns:s=\"" + std::string(kSoapNs) +
+         "\" xmlns:a=\"" + std::string(kAddressingNs) + "\" xmlns:d=\"" +
+         std::string(kDiscoveryNs) +
+         "\" xmlns:dn=\"http://www.onvif.org/ver10/network/wsdl\"><s:Header>"
+         "<a:Action s:mustUnderstand=\"1\">http://schemas.xmlsoap.org/ws/2005/04/discovery/Probe"
+         "</a:Action>" +
+         element("a:MessageID", message_id) +
+         "<a:ReplyTo><a:Address>http://schemas.xmlsoap.org/ws/2004/08/addressing/role/anonymous"
+         "</a:Address></a:ReplyTo><a:To s:mustUnderstand=\"1\">"
+         "urn:schemas-xmlsoap-org:ws:2005:04:discovery</a:To></s:Header><s:Body><d:Probe>"
+         "<d:Types>dn:NetworkVideoTransmitter</d:Types></d:Probe></s:Body></s:Envelope>";
+}
+
+std::string randomMessageId() {
+  std::string b = randomNonce();
+  b[6] = static_cast<char>((b[6] & 0x0F) | 0x40);  // version 4
+  b[8] = static_cast<char>((b[8] & 0x3F) | 0x80);  // RFC 4122 variant
+  std::string id = "urn:uuid:";
+  char hex[3];
+  for (int i = 0; i < 16; ++i) {
+    if (i == 4 || i == 6 || i == 8 || i == 10) id += '-';
+    std::snprintf(hex, sizeof hex, "%02x", static_cast<unsigned char>(b[i]));
+    id += hex;
+  }
+  return id;
 }
 
 }  // namespace ptz::onvif

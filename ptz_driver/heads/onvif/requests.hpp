@@ -60,4 +60,11 @@ Request gotoPreset(std::string_view profile_token, std::string_view preset_token
 Request setPreset(std::string_view profile_token, std::string_view preset_name,
                   std::string_view preset_token = "");
 
+// WS-Discovery (the 2005/04 version ONVIF uses): the whole Probe message for
+// NetworkVideoTransmitters, sent by UDP to 239.255.255.250:3702; cameras answer ProbeMatches
+// (device_replies.hpp) relating to `message_id`.
+std::string probeMessage(std::string_view message_id);
+// urn:uuid:… with 16 random bytes (a version 4 UUID).
+std::string randomMessageId();
+
 }  // namespace ptz::onvif

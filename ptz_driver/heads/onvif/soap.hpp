@@ -19,6 +19,8 @@ constexpr std::string_view kDeviceNs = "http://www.onvif.org/ver10/device/wsdl";
 constexpr std::string_view kMediaNs = "http://www.onvif.org/ver10/media/wsdl";
 constexpr std::string_view kPtzNs = "http://www.onvif.org/ver20/ptz/wsdl";
 constexpr std::string_view kSchemaNs = "http://www.onvif.org/ver10/schema";
+constexpr std::string_view kAddressingNs = "http://schemas.xmlsoap.org/ws/2004/08/addressing";
+constexpr std::string_view kDiscoveryNs = "http://schemas.xmlsoap.org/ws/2005/04/discovery";
 constexpr std::string_view kWsseNs =
     "http://docs.oasis-open.org/wss/2004/01/oasis-200401-wss-wssecurity-secext-1.0.xsd";
 

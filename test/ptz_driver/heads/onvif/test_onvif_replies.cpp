@@ -341,6 +341,32 @@ TEST(OnvifRepliesHostile, MissingFieldsAreNamed) {
     EXPECT_TRUE(contains(c.error, c.want)) << c.want << "\n  got: " << c.error;
 }
 
+TEST(OnvifReplies, ProbeMatches) {
+  const std::string id = "urn:uuid:01234567-dead-beef-baad-abcdeffedcba";
+  const std::string reply =
+      replaced(fixture("ProbeMatches.xml"), "SERVICE_URI",
+               "http://192.168.68.111/onvif/device_service  http://[fe80::1]/onvif/device_service");
+  const Result<std::vector<ProbeMatch>> m = parseProbeMatches(reply, id);
+  ASSERT_TRUE(m) << m.error();
+  ASSERT_EQ(m->size(), 1u);
+  EXPECT_EQ(m->front().endpoint, "uuid:c9790c3a-701b-464d-a189-0060351c8ada");
+  EXPECT_EQ(m->front().types,
+            (std::vector<std::string>{"dn:NetworkVideoTransmitter", "tds:Device"}));
+  ASSERT_EQ(m->front().scopes.size(), 7u);
+  EXPECT_EQ(m->front().scopes[3], "onvif://www.onvif.org/type/ptz");
+  EXPECT_EQ(m->front().scopes[6], "onvif://www.onvif.org/location/");
+  EXPECT_EQ(m->front().xaddrs,
+            (std::vector<std::string>{"http://192.168.68.111/onvif/device_service",
+                                      "http://[fe80::1]/onvif/device_service"}));
+  EXPECT_TRUE(parseProbeMatches(reply, ""));
+  EXPECT_TRUE(contains(parseProbeMatches(reply, "urn:uuid:other").error(), "not our Probe's"));
+  // The recorded reply's template placeholder is no URL.
+  EXPECT_TRUE(contains(parseProbeMatches(fixture("ProbeMatches.xml"), id).error(),
+                       "XAddrs 'SERVICE_URI': not a URL"));
+  EXPECT_TRUE(
+      contains(parseProbeMatches(fixture("GetStatus.xml"), id).error(), "expected ProbeMatches"));
+}
+
 TEST(OnvifReaders, NumbersDurationsTexts) {
   for (const auto& [text, value] : std::vector<std::pair<const char*, double>>{
            {"1.5", 1.5}, {"+1.5", 1.5}, {"-0", 0.0}, {"1e-3", 0.001}, {"360", 360.0}}) {

@@ -204,5 +204,26 @@ TEST(OnvifRequests, SecurityHeaderInTheEnvelope) {
   EXPECT_EQ(doc.root().child("Body").child("GetNodes").namespaceUri(), kPtzNs);
 }
 
+TEST(OnvifDiscovery, ProbeMessage) {
+  const std::string id = randomMessageId();
+  EXPECT_EQ(id.size(), 9u + 36u) << id;
+  EXPECT_EQ(id.rfind("urn:uuid:", 0), 0u);
+  EXPECT_EQ(id[9 + 14], '4') << id;  // version 4
+  EXPECT_NE(randomMessageId(), id);
+  const XmlDocument doc = XmlDocument::parse(probeMessage(id));
+  ASSERT_TRUE(doc.ok()) << doc.error();
+  EXPECT_EQ(doc.root().namespaceUri(), kSoapNs);
+  const XmlNode header = doc.root().child("Header");
+  EXPECT_EQ(childNames(header, kAddressingNs), (Names{"Action", "MessageID", "ReplyTo", "To"}));
+  EXPECT_EQ(header.child("Action").text(), "http://schemas.xmlsoap.org/ws/2005/04/discovery/Probe");
+  EXPECT_EQ(header.child("MessageID").text(), id);
+  EXPECT_EQ(header.child("To").text(), "urn:schemas-xmlsoap-org:ws:2005:04:discovery");
+  const XmlNode probe = doc.root().find({"Body", "Probe"});
+  EXPECT_EQ(probe.namespaceUri(), kDiscoveryNs);
+  EXPECT_EQ(childNames(probe, kDiscoveryNs), (Names{"Types"}));
+  EXPECT_EQ(probe.child("Types").text(), "dn:NetworkVideoTransmitter");
+  EXPECT_NE(probeMessage("a&b").find("<a:MessageID>a&amp;b</a:MessageID>"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace ptz::onvif
