@@ -14,12 +14,20 @@ FreshnessGate::FreshnessGate(StatusReporter& status, FreshnessLimits limits, std
       reason_prefix_(std::move(reason_prefix)),
       clock_(clock) {}
 
-bool FreshnessGate::admit(const std::string& channel, int64_t capture_utime, int64_t publish_utime,
-                          int64_t frame_seq, int64_t received_utime) {
+bool FreshnessGate::fresh(int64_t capture_utime, int64_t publish_utime, int64_t now_utime) const {
+  return judge(capture_utime, publish_utime, now_utime) == Freshness::kFresh;
+}
+
+Freshness FreshnessGate::judge(int64_t capture_utime, int64_t publish_utime,
+                               int64_t now_utime) const {
   const bool wall_clock =
       clock_ == CaptureClock::kWall || captureOnWallClock(capture_utime, publish_utime);
-  const Freshness fresh =
-      judgeFreshness(capture_utime, publish_utime, received_utime, limits_, wall_clock);
+  return judgeFreshness(capture_utime, publish_utime, now_utime, limits_, wall_clock);
+}
+
+bool FreshnessGate::admit(const std::string& channel, int64_t capture_utime, int64_t publish_utime,
+                          int64_t frame_seq, int64_t received_utime) {
+  const Freshness fresh = judge(capture_utime, publish_utime, received_utime);
   if (fresh == Freshness::kFresh) return true;
   const std::string reason = freshnessReason(fresh);
   status_.countDropped(channel, reason_prefix_ + reason);
@@ -58,6 +66,18 @@ bool FrameIntake::accept(const ptzstereo::stereo_frame_t& m, int64_t received_ut
     return false;
   }
   return true;
+}
+
+bool FrameIntake::stillFresh(const ptzstereo::stereo_frame_t& m, int64_t now_utime) {
+  return fresh_.admit(channel_, m.utime, m.publish_utime, m.seq, now_utime);
+}
+
+bool FrameIntake::mayAnswer(const ptzstereo::stereo_frame_t& m, int64_t now_utime) {
+  if (fresh_.fresh(m.utime, m.publish_utime, now_utime)) return true;
+  status_.increment("answers_withheld_stale");
+  log_.warn("withheld", status_.process() + ": withheld the answers to frame " +
+                            std::to_string(m.seq) + ": it went stale while they were sent");
+  return false;
 }
 
 bool FrameIntake::decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right) {

@@ -29,8 +29,12 @@ class FreshnessGate {
   // received at received_utime may be used; if not, it is dropped and counted on channel.
   bool admit(const std::string& channel, int64_t capture_utime, int64_t publish_utime,
              int64_t frame_seq, int64_t received_utime);
+  // The same judgement, neither counted nor said.
+  bool fresh(int64_t capture_utime, int64_t publish_utime, int64_t now_utime) const;
 
  private:
+  Freshness judge(int64_t capture_utime, int64_t publish_utime, int64_t now_utime) const;
+
   StatusReporter& status_;
   FreshnessLimits limits_;
   std::string what_;
@@ -48,6 +52,12 @@ class FrameIntake {
   // Fresh, well-formed and of the rig's size and colour; else dropped (stale, future, bad_image,
   // size_mismatch).
   bool accept(const ptzstereo::stereo_frame_t& m, int64_t received_utime);
+  // Whether an accepted frame is still fresh at now_utime, after its processing; else dropped as
+  // stale. A process stopped or starved mid-frame must not answer a frame seconds old.
+  bool stillFresh(const ptzstereo::stereo_frame_t& m, int64_t now_utime);
+  // Whether an accepted and counted frame's answers may still go at now_utime; else they are
+  // withheld (counted answers_withheld_stale, not as a second drop of the frame).
+  bool mayAnswer(const ptzstereo::stereo_frame_t& m, int64_t now_utime);
   // Both images as BGR (after accept); else dropped as bad_image.
   bool decode(const ptzstereo::stereo_frame_t& m, cv::Mat* left, cv::Mat* right);
   // Drops frame seq for reason, counted and said with why.

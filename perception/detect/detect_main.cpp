@@ -60,22 +60,27 @@ class DetectNode {
       intake_.drop(m.seq, "bad_image", why);
       return;
     }
+    status_.setCounters(pipeline_.counters());
+    if (!intake_.stillFresh(m, wallUtime())) return;  // went stale while processed: not answered
     // Counted in once accepted: every message is either in or dropped, never both.
     status_.countIn(ch_frame_, latencyMs(m.utime, received));
     if (out.target_reason_changed) {
       std::fprintf(stderr, "ptz-detect: target: %s\n", pipeline_.targetReason().c_str());
     }
     // ptz-control's input first: the chain does not wait for the other two to be encoded and sent.
-    publish(ch_tracks_, &out.tracks);
-    publish(ch_pose_, &out.pose);
-    publish(ch_detections_, &out.detections);
-    status_.setCounters(pipeline_.counters());
+    if (!publishWhileFresh(m, ch_tracks_, &out.tracks)) return;
+    if (!publishWhileFresh(m, ch_pose_, &out.pose)) return;
+    publishWhileFresh(m, ch_detections_, &out.detections);
   }
 
+  // A process stopped between two publishes (a send wakes the receivers, whose answer may stop
+  // this one) must not send the rest seconds later: each answer is judged again as it goes.
   template <class Msg>
-  void publish(const std::string& ch, Msg* msg) {
+  bool publishWhileFresh(const ptzstereo::stereo_frame_t& frame, const std::string& ch, Msg* msg) {
     msg->publish_utime = wallUtime();
+    if (!intake_.mayAnswer(frame, msg->publish_utime)) return false;
     status_.publish(ch, *msg, latencyMs(msg->utime, msg->publish_utime));
+    return true;
   }
 
   void onSelect(const ptzstereo::target_select_t& m) {
