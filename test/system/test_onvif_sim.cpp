@@ -1,0 +1,121 @@
+// ptz-sim's heads as ONVIF cameras, driven by an independent client (the npm package `onvif`,
+// test/js/onvif_client_check.js): ptz-sim a real process in a private network namespace, a
+// password from a file, the cameras' clock an hour off the host's (the client must correct for
+// it). The position the client reads back is the one it asked for, and the simulator's truth
+// (SIM_TRUTH) is the model's degrees for it.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include "ptz_driver/emulators/onvif/onvif_model.hpp"
+#include "ptzstereo/process_status_t.hpp"
+#include "ptzstereo/sim_truth_t.hpp"
+#include "support/child_process.hpp"
+#include "support/lcm_wait.hpp"
+#include "support/mcap_check.hpp"
+
+using namespace std::chrono_literals;
+using ptz::test::ChildProcess;
+
+namespace {
+
+const std::vector<std::string> kOnvifPackages = {"onvif"};
+
+struct Truth {
+  ptzstereo::sim_truth_t last;
+  int64_t count = 0;
+  std::map<std::string, int64_t> sim_counters;
+  void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
+    last = *m;
+    ++count;
+  }
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
+                const ptzstereo::process_status_t* m) {
+    if (m->process != "ptz-sim") return;
+    for (const auto& c : m->counters) sim_counters[c.name] = c.value;
+  }
+};
+
+}  // namespace
+
+TEST(OnvifSim, AnIndependentClientMovesTheHeadAndReadsItBack) {
+  PTZ_REQUIRE_JS(kOnvifPackages);
+  const std::string model_file = PTZ_SOURCE_DIR "/config/onvif/generic_ptz.yaml";
+  const ptz::driver::OnvifModel model = ptz::driver::OnvifModel::load(model_file);
+  const std::string password_file = "/tmp/ptz_onvif_password_" + std::to_string(getpid());
+  std::ofstream(password_file) << "not-in-any-flag\n";
+  setenv("ONVIF_PASSWORD", "not-in-any-flag", 1);  // the client's, as it reads it
+
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ASSERT_TRUE(lcm.good());
+  Truth truth;
+  lcm.subscribe("SIM_TRUTH", &Truth::onTruth, &truth);
+  lcm.subscribe("PROCESS_STATUS_.*", &Truth::onStatus, &truth);
+  const int port = 18560;
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                    PTZ_SOURCE_DIR "/config/sim_default.yaml", "--encoding", "jpeg", "--duration-s",
+                    "120", "--onvif-port", std::to_string(port), "--onvif-model", model_file,
+                    "--onvif-password-file", password_file, "--onvif-clock-offset-s", "3600",
+                    "--status-period-s", "0.2"});
+  ASSERT_TRUE(sim.started());
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return truth.count > 0; }, 30s))
+      << "ptz-sim published no SIM_TRUTH";
+  const double left_pan_before_rad = truth.last.left_head.pan_rad;
+
+  // The right camera (port + 1): the left stays home.
+  const double x = 0.5, y = -0.25, zoom = 0.6;
+  const ptz::test::JsCheckResult r = ptz::test::runJsChecker(
+      "onvif_client_check.js", {"--port", std::to_string(port + 1), "--user", "admin", "--x",
+                                std::to_string(x), "--y", std::to_string(y), "--zoom",
+                                std::to_string(zoom), "--tolerance", "0.005", "--timeout-s", "60"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_FALSE(r.json.is_null()) << r.err;
+  std::printf("onvif client: %s\n", r.json.dump().c_str());
+  EXPECT_EQ(r.json["profiles"][0]["token"], "profile_1");
+  EXPECT_EQ(r.json["profiles"][0]["encoding"], "H264");
+  EXPECT_EQ(r.json["deviceInformation"]["serialNumber"], "PTZSIM-RIGHT");
+  EXPECT_NEAR(r.json["timeShiftMs"].get<double>(), 3600e3, 2000);
+  const double got_x = r.json["status"]["x"], got_y = r.json["status"]["y"],
+               got_zoom = r.json["status"]["zoom"];
+  EXPECT_NEAR(got_x, x, 0.005);
+  EXPECT_NEAR(got_y, y, 0.005);
+  EXPECT_NEAR(got_zoom, zoom, 0.005);
+
+  // The simulator's truth once settled: the model's degrees and zoom ratio for what was asked.
+  constexpr double kDeg = M_PI / 180;
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm,
+      [&] {
+        const auto& h = truth.last.right_head;
+        return std::abs(h.pan_rad - model.panRad(x)) < 0.05 * kDeg &&
+               std::abs(h.tilt_rad - model.tiltRad(y)) < 0.05 * kDeg &&
+               std::abs(h.zoom - model.zoomRatio(zoom)) < 0.005;
+      },
+      30s))
+      << "right head at pan " << truth.last.right_head.pan_rad / kDeg << " deg, tilt "
+      << truth.last.right_head.tilt_rad / kDeg << " deg, zoom " << truth.last.right_head.zoom;
+  const auto& h = truth.last.right_head;
+  EXPECT_NEAR(h.pan_rad / kDeg, 85, 0.05);
+  // What the client read back was the truth of its moment, in the model's map.
+  EXPECT_NEAR(model.panRad(got_x) / kDeg, h.pan_rad / kDeg, 0.005 * 170 + 0.05);
+  EXPECT_NEAR(truth.last.left_head.pan_rad, left_pan_before_rad, 1e-3);  // the other untouched
+
+  // A wrong password is refused and counted in ptz-sim's status.
+  setenv("ONVIF_PASSWORD", "wrong", 1);
+  const ptz::test::JsCheckResult refused = ptz::test::runJsChecker(
+      "onvif_client_check.js",
+      {"--port", std::to_string(port), "--user", "admin", "--x", "0", "--y", "0", "--zoom", "0"});
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find("not Authorized"), std::string::npos) << refused.err;
+  EXPECT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return truth.sim_counters["onvif_auth_refused"] >= 1; }, 10s));
+  EXPECT_GE(truth.sim_counters["onvif_requests"], 8);
+  sim.stop();
+  unlink(password_file.c_str());
+}
