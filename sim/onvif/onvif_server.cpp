@@ -239,7 +239,13 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
       return bad(404);
     }
     if (method != "POST") return bad(405);
-    if (!plainHost(host)) host = options_.host + ":" + std::to_string(ports_[c->camera]);
+    const std::string our_port = std::to_string(ports_[c->camera]);
+    if (!plainHost(host)) {
+      host = options_.host + ":" + our_port;
+    } else if (host.find(':', host.rfind(']') == std::string::npos ? 0 : host.rfind(']')) ==
+               std::string::npos) {
+      host += ":" + our_port;  // no port in Host: the XAddrs still need ours
+    }
     const driver::OnvifReply r =
         cameras_[c->camera].handle(body, "http://" + host, now, host_now_s);
     ++counters_.requests;

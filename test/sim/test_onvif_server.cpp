@@ -181,10 +181,19 @@ TEST(OnvifServer, ARequestSplitOverManyWritesIsAnsweredAndTheConnectionKeptAlive
   const Response second = c.await(&server, 100), third_r = c.await(&server, 100);
   EXPECT_EQ(second.status, 200);
   EXPECT_NE(second.body.find("GetSystemDateAndTimeResponse"), std::string::npos);
+  // XAddrs name the host the client reached, with our port when its Host header had none.
+  c.send(post("/onvif/device_service", soap("GetServices", "http://www.onvif.org/ver10/device/wsdl",
+                                            "<IncludeCapability>false</IncludeCapability>")),
+         &server, 100);
+  const Response services = c.await(&server, 100);
+  EXPECT_NE(services.body.find("<tds:XAddr>http://127.0.0.1:" +
+                               std::to_string(server.port(Side::kLeft)) + "/onvif/ptz_service<"),
+            std::string::npos)
+      << services.body;
   EXPECT_EQ(third_r.status, 200);
   EXPECT_NE(third_r.body.find("GetStatusResponse"), std::string::npos);
   EXPECT_FALSE(c.closed());
-  EXPECT_EQ(server.counters().requests, 3);
+  EXPECT_EQ(server.counters().requests, 4);
   EXPECT_EQ(server.counters().bad_requests, 0);
   // Connection: close is honoured.
   c.send(post("/onvif/ptz_service", kGetStatus, "Connection: close\r\n"), &server, 100);
