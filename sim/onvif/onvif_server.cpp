@@ -22,6 +22,7 @@ namespace ptz::sim {
 namespace {
 
 constexpr size_t kMaxWriteBacklog = 1 << 20;  // a client that does not read: closed beyond
+constexpr double kLingerS = 2;  // after the last answer, how long unread input is discarded
 
 const char* reason(int status) {
   switch (status) {
@@ -276,6 +277,25 @@ void OnvifServer::serve(double host_now_s, const std::array<PtzPose, 2>& now) {
       c->delayed_due_s = -1;
       c->last_activity_s = host_now_s;
     }
+    if (c->closing_since_s >= 0) {
+      // Lingering after the last answer: what the client still sends is discarded until it
+      // closes (closing at once with unread bytes would reset the connection and could lose
+      // the answer, a 413 say, before the client read it).
+      char buf[16384];
+      ssize_t n = 0;
+      while ((n = ::recv(c->fd, buf, sizeof buf, 0)) > 0) {
+      }
+      const bool done = n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) ||
+                        host_now_s - c->closing_since_s > kLingerS;
+      if (done) {
+        ::close(c->fd);
+        it = connections_.erase(it);
+      } else {
+        ++it;
+      }
+      continue;
+    }
+    bool eof = false;
     if (c->delayed_due_s < 0 && !c->close_after_write) {
       char buf[16384];
       for (;;) {
@@ -286,15 +306,23 @@ void OnvifServer::serve(double host_now_s, const std::array<PtzPose, 2>& now) {
           if (c->in.size() > options_.max_request_bytes + sizeof buf) break;  // 413 below
           continue;
         }
-        if (n == 0 || (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) keep = false;
+        if (n == 0) {
+          eof = true;  // the client is done sending: answer what it sent, then close
+        } else if (errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+          keep = false;
+        }
         break;
       }
     }
     if (keep) keep = handleInput(c, host_now_s, now[c->camera]);
+    if (keep && eof && c->delayed_due_s < 0) c->close_after_write = true;
     if (keep) keep = flush(c);
     if (keep && c->out.size() > kMaxWriteBacklog) keep = false;
-    if (keep && c->close_after_write && c->out.empty()) keep = false;
-    if (keep && c->delayed_due_s < 0 && host_now_s - c->last_activity_s > options_.idle_timeout_s) {
+    if (keep && c->close_after_write && c->out.empty()) {
+      ::shutdown(c->fd, SHUT_WR);
+      c->closing_since_s = host_now_s;
+    } else if (keep && c->delayed_due_s < 0 &&
+               host_now_s - c->last_activity_s > options_.idle_timeout_s) {
       ++counters_.connections_timed_out;
       keep = false;
     }

@@ -67,6 +67,7 @@ class OnvifServer {
     std::string in, out;
     double last_activity_s = 0;
     bool close_after_write = false;
+    double closing_since_s = -1;  // answered and shut down for writing: lingering
     // A cheap camera's late reply: nothing more is read from this connection until it went
     // out (HTTP/1.1 answers in order).
     std::string delayed;

@@ -130,6 +130,7 @@ class Client {
     return {};
   }
   bool closed() const { return closed_; }
+  void shutdownWrite() { ::shutdown(fd_, SHUT_WR); }
 
  private:
   int fd_ = -1;
@@ -193,8 +194,17 @@ TEST(OnvifServer, ARequestSplitOverManyWritesIsAnsweredAndTheConnectionKeptAlive
   EXPECT_EQ(third_r.status, 200);
   EXPECT_NE(third_r.body.find("GetStatusResponse"), std::string::npos);
   EXPECT_FALSE(c.closed());
-  EXPECT_EQ(server.counters().requests, 4);
+  EXPECT_EQ(server.counters().requests, 4);  // and the half-closed client's below
   EXPECT_EQ(server.counters().bad_requests, 0);
+  // A client that half-closes after its request still gets the answer.
+  {
+    Client h(server.port(Side::kRight));
+    h.send(post("/onvif/ptz_service", kGetStatus), &server, 100);
+    h.shutdownWrite();
+    const Response half = h.await(&server, 100);
+    EXPECT_EQ(half.status, 200);
+    EXPECT_NE(half.body.find("GetStatusResponse"), std::string::npos);
+  }
   // Connection: close is honoured.
   c.send(post("/onvif/ptz_service", kGetStatus, "Connection: close\r\n"), &server, 100);
   const Response last = c.await(&server, 100);
@@ -214,6 +224,12 @@ TEST(OnvifServer, TooLargeMalformedUnknownAndWrongMethodAreRefusedAndCounted) {
   Response r = one("POST /onvif/ptz_service HTTP/1.1\r\nContent-Length: 70000\r\n\r\n");
   EXPECT_EQ(r.status, 413);
   EXPECT_TRUE(r.closed);
+  // The same with the body sent anyway: the 413 still reaches the client (the server lingers,
+  // discarding, instead of resetting the connection).
+  r = one("POST /onvif/ptz_service HTTP/1.1\r\nContent-Length: 70000\r\n\r\n" +
+          std::string(70000, 'x'));
+  EXPECT_EQ(r.status, 413);
+  EXPECT_TRUE(r.closed);
   // A head that never ends, beyond the limit.
   r = one("POST /onvif/ptz_service HTTP/1.1\r\nX-Long: " + std::string(70000, 'a'));
   EXPECT_EQ(r.status, 413);
@@ -229,13 +245,13 @@ TEST(OnvifServer, TooLargeMalformedUnknownAndWrongMethodAreRefusedAndCounted) {
             400);
   EXPECT_EQ(one(post("/index.html", kGetStatus)).status, 404);
   EXPECT_EQ(one("GET /onvif/ptz_service HTTP/1.1\r\nHost: x\r\n\r\n").status, 405);
-  EXPECT_EQ(server.counters().bad_requests, 10);
+  EXPECT_EQ(server.counters().bad_requests, 11);
   // A SOAP body that is not XML is the camera's to refuse: a fault, not an HTTP error.
   r = one(post("/onvif/ptz_service", "<not xml"));
   EXPECT_EQ(r.status, 400);
   EXPECT_NE(r.body.find("ter:WellFormed"), std::string::npos);
   EXPECT_EQ(server.counters().soap_faults, 1);
-  EXPECT_EQ(server.counters().bad_requests, 10);
+  EXPECT_EQ(server.counters().bad_requests, 11);
   // After all that the server still answers.
   EXPECT_EQ(one(post("/onvif/ptz_service", kGetStatus)).status, 200);
 }
