@@ -3,7 +3,10 @@
 // password from a file, the cameras' clock an hour off the host's (the client must correct for
 // it). The position the client reads back is the one it asked for, and the simulator's truth
 // (SIM_TRUTH) is the model's degrees for it.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -41,7 +44,98 @@ struct Truth {
   }
 };
 
+// A blocking client socket with the request sent (-1 when ptz-sim does not take it).
+int sendRequest(int port, const std::string& path, const std::string& body) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  timeval timeout{30, 0};  // generous: the machine is loaded
+  ::setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<uint16_t>(port));
+  ::inet_pton(AF_INET, "127.0.0.1", &a.sin_addr);
+  const std::string request = "POST " + path + " HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: " +
+                              std::to_string(body.size()) + "\r\n\r\n" + body;
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 ||
+      ::send(fd, request.data(), request.size(), MSG_NOSIGNAL) !=
+          static_cast<ssize_t>(request.size())) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// The whole response (head and Content-Length bytes of body); "" on a timeout or a close.
+std::string readResponse(int fd) {
+  std::string in;
+  char buf[8192];
+  for (;;) {
+    const size_t end = in.find("\r\n\r\n");
+    if (end != std::string::npos) {
+      const size_t cl = in.find("Content-Length: ");
+      const size_t length = cl < end ? std::stoul(in.substr(cl + 16)) : 0;
+      if (in.size() >= end + 4 + length) return in;
+    }
+    const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+    if (n <= 0) return "";
+    in.append(buf, static_cast<size_t>(n));
+  }
+}
+
+std::string soap(const std::string& op, const std::string& ns, const std::string& inner = "") {
+  return "<s:Envelope xmlns:s=\"http://www.w3.org/2003/05/soap-envelope\"><s:Body><" + op +
+         " xmlns=\"" + ns + "\">" + inner + "</" + op + "></s:Body></s:Envelope>";
+}
+
 }  // namespace
+
+TEST(OnvifSim, ACheapCamerasLateStatusDoesNotHoldTheOtherCamera) {
+  // The cheap model with a 2 s GetStatus: far beyond any hiccup of a loaded machine.
+  const std::string model_file = "/tmp/ptz_onvif_cheap_" + std::to_string(getpid()) + ".yaml";
+  {
+    std::ifstream in(PTZ_SOURCE_DIR "/config/onvif/cheap_ptz.yaml");
+    std::ofstream out(model_file);
+    for (std::string line; std::getline(in, line);) {
+      out << (line.rfind("status_delay_ms:", 0) == 0 ? "status_delay_ms: 2000" : line) << "\n";
+    }
+  }
+  lcm::LCM lcm(ptz::test::kTestUrl);
+  ASSERT_TRUE(lcm.good());
+  Truth truth;
+  lcm.subscribe("SIM_TRUTH", &Truth::onTruth, &truth);
+  const int port = 18570;
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
+                    PTZ_SOURCE_DIR "/config/sim_default.yaml", "--encoding", "jpeg", "--duration-s",
+                    "120", "--onvif-port", std::to_string(port), "--onvif-model", model_file});
+  ASSERT_TRUE(sim.started());
+  ASSERT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return truth.count > 0; }, 30s))
+      << "ptz-sim published no SIM_TRUTH";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int late = sendRequest(port, "/onvif/ptz_service",
+                               soap("GetStatus", "http://www.onvif.org/ver20/ptz/wsdl",
+                                    "<ProfileToken>profile_1</ProfileToken>"));
+  const int quick =
+      sendRequest(port + 1, "/onvif/device_service",
+                  soap("GetDeviceInformation", "http://www.onvif.org/ver10/device/wsdl"));
+  ASSERT_GE(late, 0);
+  ASSERT_GE(quick, 0);
+  const std::string q = readResponse(quick);
+  const auto t_quick = std::chrono::steady_clock::now();
+  const std::string l = readResponse(late);
+  const auto t_late = std::chrono::steady_clock::now();
+  ::close(quick);
+  ::close(late);
+  EXPECT_EQ(q.rfind("HTTP/1.1 200", 0), 0u) << q;
+  EXPECT_NE(q.find("CheapDome-2"), std::string::npos);
+  EXPECT_EQ(l.rfind("HTTP/1.1 200", 0), 0u) << l;
+  EXPECT_NE(l.find("GetStatusResponse"), std::string::npos);
+  // The late answer came no earlier than its delay; the other camera's before it was due (the
+  // loop was not held).
+  EXPECT_GE(t_late - t0, 1900ms);
+  EXPECT_LT(t_quick - t0, 1900ms);
+  sim.stop();
+  unlink(model_file.c_str());
+}
 
 TEST(OnvifSim, AnIndependentClientMovesTheHeadAndReadsItBack) {
   PTZ_REQUIRE_JS(kOnvifPackages);
