@@ -199,6 +199,7 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
     bool keep_alive = version == "HTTP/1.1";
     long long content_length = -1;
     std::string host;
+    bool expect_continue = false;
     for (size_t pos = line_end + 2; pos < head_end;) {
       const size_t eol = c->in.find("\r\n", pos);
       const std::string h = c->in.substr(pos, eol - pos);
@@ -223,6 +224,8 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
         if (v.find("keep-alive") != std::string::npos) keep_alive = true;
       } else if (name == "host") {
         host = value;
+      } else if (name == "expect") {
+        expect_continue = lower(value) == "100-continue";
       }
     }
     const size_t body_bytes = content_length < 0 ? 0 : static_cast<size_t>(content_length);
@@ -230,9 +233,16 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
         head_end + 4 + body_bytes > options_.max_request_bytes) {
       return bad(413);
     }
-    if (c->in.size() < head_end + 4 + body_bytes) return true;  // the body is still coming
+    if (c->in.size() < head_end + 4 + body_bytes) {  // the body is still coming
+      // Clients that ask (.NET's, curl's above 1 KiB) wait for this before they send it.
+      if (expect_continue && !c->continue_sent) c->out += "HTTP/1.1 100 Continue\r\n\r\n";
+      c->continue_sent = true;
+      return true;
+    }
+    c->continue_sent = false;
     const std::string body = c->in.substr(head_end + 4, body_bytes);
     c->in.erase(0, head_end + 4 + body_bytes);
+    c->request_start_s = host_now_s;  // a pipelined next request starts now
 
     const std::string path = target.substr(0, target.find('?'));
     if (path != "/onvif/device_service" && path != "/onvif/media_service" &&
@@ -301,6 +311,7 @@ void OnvifServer::serve(double host_now_s, const std::array<PtzPose, 2>& now) {
       for (;;) {
         const ssize_t n = ::recv(c->fd, buf, sizeof buf, 0);
         if (n > 0) {
+          if (c->in.empty()) c->request_start_s = host_now_s;
           c->in.append(buf, static_cast<size_t>(n));
           c->last_activity_s = host_now_s;
           if (c->in.size() > options_.max_request_bytes + sizeof buf) break;  // 413 below
@@ -322,7 +333,9 @@ void OnvifServer::serve(double host_now_s, const std::array<PtzPose, 2>& now) {
       ::shutdown(c->fd, SHUT_WR);
       c->closing_since_s = host_now_s;
     } else if (keep && c->delayed_due_s < 0 &&
-               host_now_s - c->last_activity_s > options_.idle_timeout_s) {
+               (host_now_s - c->last_activity_s > options_.idle_timeout_s ||
+                (!c->in.empty() && host_now_s - c->request_start_s > options_.idle_timeout_s))) {
+      // Silent, or trickling a request byte by byte (slowloris): either holds a connection.
       ++counters_.connections_timed_out;
       keep = false;
     }

@@ -66,6 +66,8 @@ class OnvifServer {
     size_t camera = 0;
     std::string in, out;
     double last_activity_s = 0;
+    double request_start_s = 0;  // when the first byte of what is in `in` came
+    bool continue_sent = false;  // 100 Continue sent for the request in `in`
     bool close_after_write = false;
     double closing_since_s = -1;  // answered and shut down for writing: lingering
     // A cheap camera's late reply: nothing more is read from this connection until it went

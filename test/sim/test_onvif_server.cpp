@@ -205,6 +205,16 @@ TEST(OnvifServer, ARequestSplitOverManyWritesIsAnsweredAndTheConnectionKeptAlive
     EXPECT_EQ(half.status, 200);
     EXPECT_NE(half.body.find("GetStatusResponse"), std::string::npos);
   }
+  // Expect: 100-continue gets its 100 before the body is sent.
+  const std::string body = kGetStatus;
+  c.send(
+      "POST /onvif/ptz_service HTTP/1.1\r\nHost: 127.0.0.1\r\nExpect: 100-continue\r\n"
+      "Content-Length: " +
+          std::to_string(body.size()) + "\r\n\r\n",
+      &server, 100);
+  EXPECT_EQ(c.await(&server, 100).status, 100);
+  c.send(body, &server, 100);
+  EXPECT_EQ(c.await(&server, 100).status, 200);
   // Connection: close is honoured.
   c.send(post("/onvif/ptz_service", kGetStatus, "Connection: close\r\n"), &server, 100);
   const Response last = c.await(&server, 100);
@@ -322,9 +332,23 @@ TEST(OnvifServer, ConnectionsBeyondTheCapAreRefusedAndSilentOnesClosed) {
   EXPECT_EQ(server.counters().connections_timed_out, 2);
   a.drain();
   EXPECT_TRUE(a.closed());
-  Client d(port);
-  d.send(post("/onvif/ptz_service", kGetStatus), &server, 106);
-  EXPECT_EQ(d.await(&server, 106).status, 200);
+  {
+    Client d(port);
+    d.send(post("/onvif/ptz_service", kGetStatus), &server, 106);
+    EXPECT_EQ(d.await(&server, 106).status, 200);
+  }
+  server.serve(107, kHeads);  // d's close seen
+  // A client trickling its request a byte every 2 s is never silent for 5 s, but its request
+  // is unfinished for more: closed.
+  Client slowloris(port);
+  const std::string request = post("/onvif/ptz_service", kGetStatus);
+  for (int i = 0; i < 3; ++i) slowloris.send(request.substr(i, 1), &server, 200 + 2 * i);
+  EXPECT_EQ(server.counters().connections_timed_out, 2);
+  slowloris.send(request.substr(3, 1), &server, 206);
+  server.serve(206, kHeads);
+  EXPECT_EQ(server.counters().connections_timed_out, 3);
+  slowloris.drain();
+  EXPECT_TRUE(slowloris.closed());
 }
 
 TEST(OnvifServer, PasswordFromTheFileOrTheEnvironment) {
