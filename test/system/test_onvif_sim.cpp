@@ -102,10 +102,12 @@ TEST(OnvifSim, ACheapCamerasLateStatusDoesNotHoldTheOtherCamera) {
   ASSERT_TRUE(lcm.good());
   Truth truth;
   lcm.subscribe("SIM_TRUTH", &Truth::onTruth, &truth);
+  lcm.subscribe("PROCESS_STATUS_.*", &Truth::onStatus, &truth);
   const int port = 18570;
   ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                     PTZ_SOURCE_DIR "/config/sim_default.yaml", "--encoding", "jpeg", "--duration-s",
-                    "120", "--onvif-port", std::to_string(port), "--onvif-model", model_file});
+                    "120", "--onvif-port", std::to_string(port), "--onvif-model", model_file,
+                    "--status-period-s", "0.2"});
   ASSERT_TRUE(sim.started());
   ASSERT_TRUE(ptz::test::handleUntil(
       lcm, [&] { return truth.count > 0; }, 30s))
@@ -133,6 +135,14 @@ TEST(OnvifSim, ACheapCamerasLateStatusDoesNotHoldTheOtherCamera) {
   // loop was not held).
   EXPECT_GE(t_late - t0, 1900ms);
   EXPECT_LT(t_quick - t0, 1900ms);
+  // Bad HTTP is refused and counted in ptz-sim's status, as the VISCA cameras count theirs.
+  const int bad = sendRequest(port, "/nowhere", "x");
+  ASSERT_GE(bad, 0);
+  EXPECT_EQ(readResponse(bad).rfind("HTTP/1.1 404", 0), 0u);
+  ::close(bad);
+  EXPECT_TRUE(ptz::test::handleUntil(
+      lcm, [&] { return truth.sim_counters["onvif_bad_requests"] == 1; }, 20s));
+  EXPECT_EQ(truth.sim_counters["onvif_requests"], 2);
   sim.stop();
   unlink(model_file.c_str());
 }
