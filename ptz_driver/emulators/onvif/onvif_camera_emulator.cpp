@@ -1,6 +1,7 @@
 #include "ptz_driver/emulators/onvif/onvif_camera_emulator.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
