@@ -210,6 +210,30 @@ TEST(OnvifSim, AnIndependentClientMovesTheHeadAndReadsItBack) {
   EXPECT_NEAR(model.panRad(got_x) / kDeg, h.pan_rad / kDeg, 0.005 * 170 + 0.05);
   EXPECT_NEAR(truth.last.left_head.pan_rad, left_pan_before_rad, 1e-3);  // the other untouched
 
+  // The rest of the PTZ and media operations through the package, on the same camera.
+  const ptz::test::JsCheckResult e = ptz::test::runJsChecker(
+      "onvif_client_check.js",
+      {"--port", std::to_string(port + 1), "--user", "admin", "--x", "0.5", "--y", "-0.25",
+       "--zoom", "0.6", "--exercise", "1", "--timeout-s", "60"});
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  ASSERT_TRUE(e.json.contains("exercise")) << e.err;
+  const nlohmann::json& ex = e.json["exercise"];
+  std::printf("onvif client exercise: %s\n", ex.dump().c_str());
+  EXPECT_EQ(ex["nodes"], nlohmann::json::array({"node_1"}));
+  EXPECT_EQ(ex["configurations"][0]["token"], "ptz_config_1");
+  EXPECT_EQ(ex["absoluteX"]["max"], 1);
+  EXPECT_EQ(ex["streamUri"].get<std::string>().rfind("rtsp://127.0.0.1:", 0), 0u);
+  EXPECT_EQ(ex["presetsSet"], nlohmann::json::array({"door"}));
+  EXPECT_EQ(ex["presetsLeft"], nlohmann::json::array());
+  const double start_x = e.json["status"]["x"];
+  // RelativeMove by -0.2; half a second of ContinuousMove at 0.5 then Stop: some way back up;
+  // GotoPreset: where the preset was set (where the head was).
+  const double relative_x = ex["afterRelativeMove"]["x"], stopped_x = ex["afterStop"]["x"];
+  EXPECT_NEAR(relative_x, start_x - 0.2, 0.01);
+  EXPECT_GT(stopped_x, relative_x + 0.02);
+  EXPECT_LT(stopped_x, 0.99);  // stopped before the end of the range (the timeout is 60 s)
+  EXPECT_NEAR(ex["afterGotoPreset"]["x"].get<double>(), start_x, 0.01);
+
   // A wrong password is refused and counted in ptz-sim's status.
   setenv("ONVIF_PASSWORD", "wrong", 1);
   const ptz::test::JsCheckResult refused = ptz::test::runJsChecker(
