@@ -59,6 +59,18 @@ std::string envelope(const std::string& body) {
          body + "</env:Body></env:Envelope>\n";
 }
 
+// A fault's reason as plain ASCII, at most 200 bytes: it may quote the request (libxml2's
+// messages quote bytes that are not UTF-8, a token cut at 40 bytes may split a character), and
+// the reply must stay well-formed XML (fuzz_onvif_camera's first find).
+std::string plainReason(const std::string& reason) {
+  std::string out = reason.substr(0, 200);
+  for (char& ch : out) {
+    const auto b = static_cast<unsigned char>(ch);
+    if (b >= 0x80 || (b < 0x20 && b != '\n' && b != '\t') || b == 0x7F) ch = '?';
+  }
+  return out;
+}
+
 std::string faultBody(const Fault& f) {
   std::string sub;
   if (!f.subcode.empty()) {
@@ -69,8 +81,8 @@ std::string faultBody(const Fault& f) {
     sub += "</env:Subcode>";
   }
   return "<env:Fault><env:Code><env:Value>" + f.code + "</env:Value>" + sub +
-         "</env:Code><env:Reason><env:Text xml:lang=\"en\">" + onvif::xmlEscape(f.what()) +
-         "</env:Text></env:Reason></env:Fault>";
+         "</env:Code><env:Reason><env:Text xml:lang=\"en\">" +
+         onvif::xmlEscape(plainReason(f.what())) + "</env:Text></env:Reason></env:Fault>";
 }
 
 // A number of an attribute or element: all of the text, finite.
