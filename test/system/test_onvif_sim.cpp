@@ -15,7 +15,7 @@
 #include <fstream>
 #include <string>
 
-#include "ptz_driver/emulators/onvif/onvif_model.hpp"
+#include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/sim_truth_t.hpp"
 #include "support/child_process.hpp"

@@ -13,7 +13,7 @@
 #include <string_view>
 
 #include "common/rig.hpp"  // PtzPose
-#include "ptz_driver/emulators/onvif/onvif_model.hpp"
+#include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 #include "ptz_driver/heads/onvif/xml.hpp"
 
 namespace ptz::driver {

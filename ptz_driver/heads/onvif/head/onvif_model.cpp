@@ -1,4 +1,4 @@
-#include "ptz_driver/emulators/onvif/onvif_model.hpp"
+#include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 
 #include <algorithm>
 #include <cmath>
