@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
@@ -19,6 +20,12 @@ namespace {
 // After a failed start-up the camera is asked again this much later, twice as long after each
 // failure up to the most (a camera coming up is found at once, a refusing one not flooded).
 constexpr double kFirstRetryS = 0.1, kMaxRetryS = 1.0;
+
+// Closer than a camera resolves (1e-6 of the generic space is ~5e-6 rad of a 340 deg pan).
+bool samePose(const PtzPose& a, const PtzPose& b) {
+  return std::abs(a.pan_rad - b.pan_rad) < 1e-7 && std::abs(a.tilt_rad - b.tilt_rad) < 1e-7 &&
+         std::abs(a.zoom - b.zoom) < 1e-7;
+}
 
 }  // namespace
 
@@ -135,6 +142,10 @@ void OnvifHead::work() {
   OnvifSession session(model_, settings_, now_s_);
   const bool continuous = settings_.move_mode == OnvifMoveMode::kContinuous;
   bool up = false;  // the start-up done and nothing failed since
+  // The last AbsoluteMove the camera took: the driver commands every tick, the camera hears
+  // only what changed (again after a stop or a failure).
+  PtzPose last_move;
+  bool moved = false;  // last_move holds one
   double retry_s = kFirstRetryS;
   std::unique_lock<std::mutex> lk(lock_);
   // Runs one request unlocked and hands its outcome over; false (and down) when it failed.
@@ -154,6 +165,7 @@ void OnvifHead::work() {
     if (!ok) {
       up = false;
       setpoint_.reset();  // no move goes out until the camera answers again
+      moved = false;
     }
     return ok;
   };
@@ -161,6 +173,7 @@ void OnvifHead::work() {
     if (stops_asked_ != stops_done_) {
       const int64_t asked = stops_asked_;
       const bool ok = up && run([&] { return session.stop(); });
+      moved = false;
       stops_done_ = asked;
       stop_confirmed_ = ok;
       wake_.notify_all();
@@ -184,7 +197,11 @@ void OnvifHead::work() {
     if (!continuous && setpoint_) {
       const PtzPose pose = *setpoint_;
       setpoint_.reset();
-      if (!run([&] { return session.absoluteMove(pose); })) continue;
+      if (!moved || !samePose(last_move, pose)) {
+        if (!run([&] { return session.absoluteMove(pose); })) continue;
+        last_move = pose;
+        moved = true;
+      }
     }
     if (status_wanted_) {
       status_wanted_ = false;
