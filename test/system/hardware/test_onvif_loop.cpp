@@ -6,7 +6,12 @@
 // within 1.5x of it, and within the VISCA test's own bounds.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -29,7 +34,7 @@ struct LoopResult {
 
 // The VISCA loop test's scenario with the heads behind `driver_args` and `sim_args`.
 LoopResult runLoop(const std::vector<std::string>& driver_args,
-                   const std::vector<std::string>& sim_args) {
+                   const std::vector<std::string>& sim_args, const std::string& driver_log = "") {
   lcm::LCM lcm(ptz::test::kTestUrl);
   ptz::test::Listener l;
   LoopResult r;
@@ -44,7 +49,7 @@ LoopResult runLoop(const std::vector<std::string>& driver_args,
       &r.states);
   std::vector<std::string> d = {PTZ_DRIVER_BIN, "--lcm-url", ptz::test::kTestUrl};
   d.insert(d.end(), driver_args.begin(), driver_args.end());
-  ChildProcess driver(d);
+  ChildProcess driver(d, driver_log);
   ChildProcess detect({PTZ_DETECT_BIN, "--lcm-url", ptz::test::kTestUrl, "--config",
                        kConfig + "detect_default.yaml"});
   ChildProcess control({PTZ_CONTROL_BIN, "--lcm-url", ptz::test::kTestUrl});
@@ -91,15 +96,24 @@ TEST(OnvifLoop, TracksTheFigureEightThroughOnvifWithin1point5xOfVisca) {
   LoopResult visca =
       runLoop({"--visca-model", visca_model, "--left-port", "52391", "--right-port", "52392"},
               {"--visca-port", "52391", "--visca-model", visca_model});
-  // A camera with a password (from the environment: never a flag) whose clock nobody set.
+  // A camera with a password (never a flag: the environment for ptz-sim, a file for
+  // ptz-driver) whose clock nobody set.
+  const std::string tmp = "/tmp/ptz_onvif_loop_" + std::to_string(::getpid());
+  std::ofstream(tmp + ".pw") << "loop-pw\n";
   ::setenv("PTZ_SIM_ONVIF_PASSWORD", "loop-pw", 1);
-  ::setenv("PTZ_ONVIF_PASSWORD", "loop-pw", 1);
   const std::string onvif_model = kConfig + "onvif/generic_ptz.yaml";
   LoopResult onvif = runLoop(
       {"--backend", "onvif", "--onvif-model", onvif_model, "--onvif-left-url",
        "http://127.0.0.1:18080", "--onvif-right-url", "http://127.0.0.1:18081",
-       "--onvif-status-rate-hz", "50"},
-      {"--onvif-port", "18080", "--onvif-model", onvif_model, "--onvif-clock-offset-s", "37"});
+       "--onvif-status-rate-hz", "50", "--onvif-password-file", tmp + ".pw"},
+      {"--onvif-port", "18080", "--onvif-model", onvif_model, "--onvif-clock-offset-s", "37"},
+      tmp + ".log");
+  std::ifstream log(tmp + ".log");
+  const std::string logged((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  std::remove((tmp + ".pw").c_str());
+  ::unsetenv("PTZ_SIM_ONVIF_PASSWORD");  // the next test's cameras have none
+  std::remove((tmp + ".log").c_str());
+  EXPECT_EQ(logged.find("loop-pw"), std::string::npos) << "the password is never printed";
   print("VISCA", visca);
   print("ONVIF", onvif);
   EXPECT_EQ(visca.sim_exit, 0);
@@ -119,4 +133,22 @@ TEST(OnvifLoop, TracksTheFigureEightThroughOnvifWithin1point5xOfVisca) {
   EXPECT_EQ(onvif.driver["head_malformed"], 0);
   EXPECT_EQ(onvif.sim["onvif_auth_refused"], 0) << "signed in the cameras' time, 37 s ahead";
   EXPECT_GT(onvif.sim["onvif_setpoints_applied"], 100);
+}
+
+// For cameras whose absolute moves are slow: ContinuousMove's velocity toward the setpoint
+// (its rate fed forward, P on GetStatus). The velocity loop adds its lag to the plant's, which
+// ptz-control's lead (made for a head that goes where it is told) does not know: about 12 px RMS
+// here against absolute moves' 1.5, so twice the VISCA test's centring bound; the rest as there.
+TEST(OnvifLoop, TracksTheFigureEightWithContinuousMoves) {
+  const std::string onvif_model = kConfig + "onvif/generic_ptz.yaml";
+  LoopResult r = runLoop({"--backend", "onvif", "--onvif-model", onvif_model, "--onvif-left-url",
+                          "http://127.0.0.1:18090", "--onvif-right-url", "http://127.0.0.1:18091",
+                          "--onvif-status-rate-hz", "50", "--onvif-move-mode", "continuous"},
+                         {"--onvif-port", "18090", "--onvif-model", onvif_model});
+  print("ONVIF continuous", r);
+  EXPECT_EQ(r.sim_exit, 0);
+  EXPECT_LE(r.summary.centering_rms_px, 20.0);
+  EXPECT_EQ(r.summary.frames_target_outside_image, 0);
+  EXPECT_LE(r.summary.position_error_rms_pct_of_range, 0.5);
+  EXPECT_EQ(r.driver["head_errors"], 0);
 }

@@ -21,6 +21,8 @@ namespace {
 // failure up to the most (a camera coming up is found at once, a refusing one not flooded).
 constexpr double kFirstRetryS = 0.1, kMaxRetryS = 1.0;
 
+constexpr double kRateSmoothingS = 0.1;
+
 // Closer than a camera resolves (1e-6 of the generic space is ~5e-6 rad of a 340 deg pan).
 bool samePose(const PtzPose& a, const PtzPose& b) {
   return std::abs(a.pan_rad - b.pan_rad) < 1e-7 && std::abs(a.tilt_rad - b.tilt_rad) < 1e-7 &&
@@ -52,9 +54,23 @@ void OnvifHead::start(double now_s) {
 }
 
 void OnvifHead::command(const PtzPose& pose, double now_s) {
-  (void)now_s;
+  // Continuous mode: the target's rate, fed forward. The driver commands every tick, the
+  // setpoints change at the frame rate: the rate is smoothed over about kRateSmoothingS.
+  const double dt = now_s - last_command_s_;
+  if (last_command_ && dt > 0 && dt < 0.5) {
+    const double a = dt / (kRateSmoothingS + dt);
+    pan_rate_filtered_ += a * ((pose.pan_rad - last_command_->pan_rad) / dt - pan_rate_filtered_);
+    tilt_rate_filtered_ +=
+        a * ((pose.tilt_rad - last_command_->tilt_rad) / dt - tilt_rate_filtered_);
+  } else {
+    pan_rate_filtered_ = tilt_rate_filtered_ = 0;
+  }
+  last_command_ = pose;
+  last_command_s_ = now_s;
   std::lock_guard<std::mutex> lk(lock_);
   setpoint_ = pose;  // replaces one the worker has not sent yet
+  pan_rate_rad_s_ = pan_rate_filtered_;
+  tilt_rate_rad_s_ = tilt_rate_filtered_;
   wake_.notify_all();
 }
 
@@ -62,6 +78,7 @@ bool OnvifHead::stop(double now_s, double timeout_s) {
   (void)now_s;
   std::unique_lock<std::mutex> lk(lock_);
   setpoint_.reset();  // nothing moves the head after the stop
+  last_command_.reset();
   if (!worker_.joinable()) return false;
   const int64_t id = ++stops_asked_;
   wake_.notify_all();
@@ -210,7 +227,8 @@ void OnvifHead::work() {
       // Continuous: the velocity toward the target from where the head is now.
       if (continuous && setpoint_) {
         const PtzPose target = *setpoint_;
-        run([&] { return session.continuousMove(target, s.pose); });
+        const double pan_rate = pan_rate_rad_s_, tilt_rate = tilt_rate_rad_s_;
+        run([&] { return session.continuousMove(target, s.pose, pan_rate, tilt_rate); });
       }
     }
   }

@@ -72,12 +72,16 @@ class OnvifHead : public PtzHead {
   std::condition_variable wake_;
   bool quit_ = false;
   std::optional<PtzPose> setpoint_;  // absolute: the newest not yet sent; continuous: the target
+  double pan_rate_rad_s_ = 0, tilt_rate_rad_s_ = 0;  // continuous: how fast the target moves
   bool status_wanted_ = false;
   int64_t stops_asked_ = 0, stops_done_ = 0;
   bool stop_confirmed_ = false;
   std::vector<Event> events_;
 
   // The driver thread's own.
+  std::optional<PtzPose> last_command_;
+  double last_command_s_ = 0;
+  double pan_rate_filtered_ = 0, tilt_rate_filtered_ = 0;
   HeadStats stats_;
   std::optional<PtzPose> measured_;
   double measured_at_s_ = 0;

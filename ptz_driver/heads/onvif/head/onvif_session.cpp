@@ -176,21 +176,21 @@ OnvifOutcome OnvifSession::absoluteMove(const PtzPose& pose) {
   return check("AbsoluteMove", onvif::parseEmptyPtzReply(body, "AbsoluteMoveResponse"));
 }
 
-OnvifOutcome OnvifSession::continuousMove(const PtzPose& target, const PtzPose& measured) {
-  auto velocity = [&](double error, double deadband, double scale) {
-    return std::abs(error) < deadband
-               ? 0.0
-               : std::clamp(settings_.continuous_gain_per_s * error / scale, -1.0, 1.0);
+OnvifOutcome OnvifSession::continuousMove(const PtzPose& target, const PtzPose& measured,
+                                          double pan_rate_rad_s, double tilt_rate_rad_s) {
+  auto velocity = [&](double error, double deadband, double feed_forward, double scale) {
+    if (std::abs(error) < deadband && std::abs(feed_forward) < deadband) return 0.0;
+    return std::clamp((feed_forward + settings_.continuous_gain_per_s * error) / scale, -1.0, 1.0);
   };
   const double speed = model_.pan_tilt_speed_max_rad_s;
   onvif::PtzVector v;
-  v.pan_tilt =
-      onvif::Vector2D{velocity(target.pan_rad - measured.pan_rad, kDeadbandRad, speed),
-                      velocity(target.tilt_rad - measured.tilt_rad, kDeadbandRad, speed), ""};
+  v.pan_tilt = onvif::Vector2D{
+      velocity(target.pan_rad - measured.pan_rad, kDeadbandRad, pan_rate_rad_s, speed),
+      velocity(target.tilt_rad - measured.tilt_rad, kDeadbandRad, tilt_rate_rad_s, speed), ""};
   // Zoom in normalised units: its velocity 1 is the lens's full range in some seconds.
   v.zoom = onvif::Vector1D{
       velocity(model_.zoomNormalised(target.zoom) - model_.zoomNormalised(measured.zoom),
-               kDeadbandZoom, 1.0),
+               kDeadbandZoom, 0.0, 1.0),
       ""};
   std::string body;
   if (OnvifOutcome o =

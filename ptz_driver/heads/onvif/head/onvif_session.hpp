@@ -57,9 +57,10 @@ class OnvifSession {
   bool started() const { return started_; }
   // AbsoluteMove to pose through the model's angle map.
   OnvifOutcome absoluteMove(const PtzPose& pose);
-  // ContinuousMove toward target from measured (P-controlled velocity; 1 s timeout so a camera
-  // left alone stops by itself).
-  OnvifOutcome continuousMove(const PtzPose& target, const PtzPose& measured);
+  // ContinuousMove toward target from measured: the target's own pan/tilt rate (rad/s, fed
+  // forward) plus gain x the error; a 1 s timeout so a camera left alone stops by itself.
+  OnvifOutcome continuousMove(const PtzPose& target, const PtzPose& measured,
+                              double pan_rate_rad_s = 0, double tilt_rate_rad_s = 0);
   OnvifOutcome stop();
   OnvifOutcome status(OnvifStatus* out);
 
