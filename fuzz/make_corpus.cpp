@@ -1,6 +1,7 @@
 // Writes the seed corpus of every fuzz target (fuzz/corpus/<target>/): real encoded messages,
 // JPEGs encoded by OpenCV, the VISCA and Pelco-D bytes the project's own encoders and camera
-// emulators produce, the project's config, model and rig files, and small LCM logs. Deterministic;
+// emulators produce, the ONVIF requests ptz-sim's cameras take, the project's config, model and
+// rig files, and small LCM logs. Deterministic;
 // `scripts/fuzz --make-corpus` runs it. Usage: ptz_fuzz_corpus SOURCE_DIR CORPUS_DIR
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -16,11 +17,13 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/rig.hpp"
 #include "common/transport/transport.hpp"
 #include "ptz_driver/emulators/visca_camera_emulator.hpp"
+#include "ptz_driver/heads/onvif/ws_security.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d.hpp"
 #include "ptz_driver/heads/visca/visca.hpp"
 #include "ptzstereo/control_state_t.hpp"
@@ -630,6 +633,71 @@ void foxglove() {
   }
 }
 
+// fuzz_onvif_camera: mode byte (bit 0 cheap, bit 1 password "secret"), then a SOAP request.
+void onvif_requests() {
+  const auto envelope = [](const std::string& body, const std::string& header = "") {
+    return "<s:Envelope xmlns:s=\"http://www.w3.org/2003/05/soap-envelope\"><s:Header>" + header +
+           "</s:Header><s:Body>" + body + "</s:Body></s:Envelope>";
+  };
+  const auto op = [&](const std::string& name, const std::string& ns, const std::string& inner) {
+    return envelope("<" + name + " xmlns=\"http://www.onvif.org/" + ns + "\">" + inner + "</" +
+                    name + ">");
+  };
+  const std::string ptz = "ver20/ptz/wsdl", media = "ver10/media/wsdl",
+                    device = "ver10/device/wsdl",
+                    profile = "<ProfileToken>profile_1</ProfileToken>";
+  const std::string tt = " xmlns=\"http://www.onvif.org/ver10/schema\"";
+  const auto pan_tilt = [&](const std::string& x, const std::string& y) {
+    return "<PanTilt" + tt + " x=\"" + x + "\" y=\"" + y + "\"/>";
+  };
+  const auto zoom = [&](const std::string& x) { return "<Zoom" + tt + " x=\"" + x + "\"/>"; };
+  const std::vector<std::tuple<std::string, uint8_t, std::string>> seeds = {
+      {"get_status", 0, op("GetStatus", ptz, profile)},
+      {"absolute_move_speed", 0,
+       op("AbsoluteMove", ptz,
+          profile + "<Position>" + pan_tilt("0.5", "-0.25") + zoom("0.5") + "</Position><Speed>" +
+              pan_tilt("0.1", "0.1") + zoom("1") + "</Speed>")},
+      {"absolute_move_cheap", 1,
+       op("AbsoluteMove", ptz,
+          profile + "<Position>" + pan_tilt("-1", "1") + "</Position><Speed>" +
+              pan_tilt("0.1", "0.1") + "</Speed>")},
+      {"relative_move", 0,
+       op("RelativeMove", ptz,
+          profile + "<Translation>" + pan_tilt("0.2", "0") + zoom("-0.1") + "</Translation>")},
+      {"continuous_move", 0,
+       op("ContinuousMove", ptz,
+          profile + "<Velocity>" + pan_tilt("-0.5", "0.3") + zoom("1") +
+              "</Velocity><Timeout>PT1.5S</Timeout>")},
+      {"stop", 0, op("Stop", ptz, profile + "<PanTilt>true</PanTilt><Zoom>false</Zoom>")},
+      {"set_preset", 0, op("SetPreset", ptz, profile + "<PresetName>door</PresetName>")},
+      {"goto_preset", 0, op("GotoPreset", ptz, profile + "<PresetToken>preset_1</PresetToken>")},
+      {"get_presets", 0, op("GetPresets", ptz, profile)},
+      {"get_nodes", 0, op("GetNodes", ptz, "")},
+      {"get_configuration_options", 0,
+       op("GetConfigurationOptions", ptz, "<ConfigurationToken>ptz_config_1</ConfigurationToken>")},
+      {"get_profiles", 0, op("GetProfiles", media, "")},
+      {"get_stream_uri", 0, op("GetStreamUri", media, profile)},
+      {"get_services", 0, op("GetServices", device, "<IncludeCapability>true</IncludeCapability>")},
+      {"get_capabilities", 0, op("GetCapabilities", device, "")},
+      {"get_device_information", 0, op("GetDeviceInformation", device, "")},
+      {"auth_get_time", 2, op("GetSystemDateAndTime", device, "")},
+      {"not_xml", 0, "<s:Envelope xmlns:s="},
+  };
+  for (const auto& [name, mode, request] : seeds) {
+    write("fuzz_onvif_camera", name, std::string(1, static_cast<char>(mode)) + request);
+  }
+  // A valid token for the target's camera clock (1000 s) and password, with a fixed nonce.
+  ptz::onvif::UsernameToken token;
+  token.user = "admin";
+  token.nonce = "0123456789abcdef";
+  token.created = ptz::onvif::xsDateTime(1000);
+  token.digest = ptz::onvif::passwordDigest(token.nonce, token.created, "secret");
+  write("fuzz_onvif_camera", "auth_token",
+        std::string(1, '\x02') + envelope("<GetStatus xmlns=\"http://www.onvif.org/" + ptz + "\">" +
+                                              profile + "</GetStatus>",
+                                          ptz::onvif::securityHeader(token)));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -647,5 +715,6 @@ int main(int argc, char** argv) {
   files(argv[1]);
   logs();
   foxglove();
+  onvif_requests();
   return 0;
 }

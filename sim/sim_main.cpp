@@ -9,6 +9,7 @@
 #include "common/transport/intake.hpp"
 #include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
+#include "sim/onvif/onvif_server.hpp"
 #include "sim/sim_messages.hpp"
 #include "sim/sim_run.hpp"
 #include "sim/visca_server.hpp"
@@ -40,9 +41,30 @@ class SimNode {
           return true;
         }) {
     const std::string visca_model = viscaModelPath(p);
+    const std::string onvif_model = onvifModelPath(p);
     if (!visca_model.empty()) {
       visca_ = std::make_unique<ViscaCameras>(driver::ViscaModel::load(visca_model),
                                               p.getInt("visca_port"), &run_);
+    } else if (!onvif_model.empty()) {
+      std::array<driver::OnvifCameraSettings, 2> cameras;
+      const std::string password = onvifPassword(p.getString("onvif_password_file"));
+      for (size_t i = 0; i < 2; ++i) {
+        cameras[i].user = p.getString("onvif_user");
+        cameras[i].password = password;
+        cameras[i].clock_offset_s = p.getDouble("onvif_clock_offset_s");
+        cameras[i].serial = i == 0 ? "PTZSIM-LEFT" : "PTZSIM-RIGHT";
+      }
+      OnvifServerOptions options;
+      options.first_port = p.getInt("onvif_port");
+      onvif_ = std::make_unique<OnvifCameras>(
+          driver::OnvifModel::load(onvif_model), cameras, options,
+          [this](const OnvifCameras::Step& step) {
+            run_.withMotorsNow([&step](Simulator& sim, double t_s) {
+              const auto sp = step({sim.plant().pose(Side::kLeft), sim.plant().pose(Side::kRight)});
+              int clamped = 0, rejected = 0;
+              if (sp) sim.command(t_s, (*sp)[0], (*sp)[1], &clamped, &rejected);
+            });
+          });
     } else {
       setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
           *lcm_, ch_setpoint_, status_,
@@ -56,6 +78,7 @@ class SimNode {
     const double duration_s = p_.getDouble("duration_s");
     const double frame_period_s = 1.0 / p_.getDouble("frame_rate_hz");
     if (visca_) visca_->start();
+    if (onvif_) onvif_->start();
     for (int64_t n = 0; !StopFlag::stopRequested(); ++n) {
       const double t_frame = n * frame_period_s;
       if ((max_frames > 0 && n >= max_frames) || (duration_s > 0 && t_frame > duration_s)) break;
@@ -76,6 +99,7 @@ class SimNode {
       status_.maybePublish();
     }
     if (visca_) visca_->stop();
+    if (onvif_) onvif_->stop();
     reportVisca();
     status_.publishLast();
     std::printf("ptz-sim: %lld frames published, %lld skipped late, %lld setpoints applied\n",
@@ -87,6 +111,17 @@ class SimNode {
 
  private:
   void reportVisca() {
+    if (onvif_) {
+      // As the VISCA cameras count theirs: what the ONVIF cameras could not read.
+      const OnvifServerCounters c = onvif_->counters();
+      status_.setCounter("onvif_requests", c.requests);
+      status_.setCounter("onvif_bad_requests", c.bad_requests);
+      status_.setCounter("onvif_soap_faults", c.soap_faults);
+      status_.setCounter("onvif_auth_refused", c.auth_refused);
+      status_.setCounter("onvif_connections_refused", c.connections_refused);
+      status_.setCounter("onvif_connections_timed_out", c.connections_timed_out);
+      status_.setCounter("onvif_setpoints_applied", onvif_->setpointsApplied());
+    }
     if (!visca_) return;
     status_.setCounter("visca_packets", visca_->packets());
     status_.setCounter("visca_malformed", visca_->malformed());
@@ -94,7 +129,7 @@ class SimNode {
   }
 
   void publishState(ptzstereo::ptz_state_t* m) {
-    if (visca_) return;  // ptz-driver publishes the state it reads from the cameras
+    if (visca_ || onvif_) return;  // ptz-driver publishes the state it reads from the cameras
     m->publish_utime = wallUtime();
     status_.publish(ch_state_, *m);
   }
@@ -159,6 +194,7 @@ class SimNode {
   SimRun run_;
   SimRun::Serve serve_;
   std::unique_ptr<ViscaCameras> visca_;
+  std::unique_ptr<OnvifCameras> onvif_;
   std::unique_ptr<SafeSubscription<ptzstereo::ptz_setpoint_t>> setpoints_;
   bool setpoints_expected_ = false;
 };

@@ -34,6 +34,18 @@ void declareSimSceneParams(Params& p) {
         "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)",
         Range::between(0, 65534));
   p.add("visca_model", "", "VISCA camera model file the heads pretend to be (visca_port)");
+  p.add("onvif_port", 0, "",
+        "realtime: serve the heads as ONVIF cameras (HTTP/SOAP) on 127.0.0.1 at this TCP port "
+        "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)",
+        Range::between(0, 65534));
+  p.add("onvif_model", "", "ONVIF camera model file the heads pretend to be (onvif_port)");
+  p.add("onvif_user", "admin", "ONVIF user name (with a password: WS-UsernameToken digest)");
+  p.add("onvif_password_file", "",
+        "file whose first line is the ONVIF password (else env PTZ_SIM_ONVIF_PASSWORD; neither: "
+        "no authentication)");
+  p.add("onvif_clock_offset_s", 0.0, "s",
+        "the ONVIF cameras' clock minus the host's (clients must correct for it)",
+        Range::between(-1e9, 1e9));
   p.addSection("scene",
                "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
                "texture_seed (7)");
@@ -69,6 +81,20 @@ std::string viscaModelPath(const Params& p) {
     throw ConfigError("parameter 'visca_port' needs 'visca_model' (a VISCA model file)");
   }
   return p.getExistingPath("visca_model");
+}
+
+std::string onvifModelPath(const Params& p) {
+  if (p.getInt("onvif_port") <= 0) return "";
+  if (p.getString("clock") == "lockstep") {
+    throw ConfigError("parameter 'onvif_port' needs clock realtime");
+  }
+  if (p.getInt("visca_port") > 0) {
+    throw ConfigError("parameters 'onvif_port' and 'visca_port' exclude each other (one plant)");
+  }
+  if (p.getString("onvif_model").empty()) {
+    throw ConfigError("parameter 'onvif_port' needs 'onvif_model' (an ONVIF model file)");
+  }
+  return p.getExistingPath("onvif_model");
 }
 
 SimClock SimClock::fromParams(const Params& p) {

@@ -25,7 +25,7 @@ constexpr int64_t kLockstepEpochUtime = 1'700'000'000'000'000;
 
 // ptz-sim's parameters but the transport's and the image encoding's, in --help's order: the
 // plant, the rig and the clock; then, after the encoding's, the noise, the lockstep timeout, the
-// setpoints' freshness, VISCA and the scene's sections.
+// setpoints' freshness, VISCA, ONVIF and the scene's sections.
 void declareSimClockParams(Params& p);
 void declareSimSceneParams(Params& p);
 // The simulator the parameters describe; throws ConfigError for a bad scene.
@@ -33,6 +33,9 @@ std::unique_ptr<Simulator> simulatorFromParams(const Params& p);
 // The VISCA model file the heads pretend to be; empty when they speak LCM (visca_port 0). Throws
 // ConfigError for visca_port in lockstep or without a model.
 std::string viscaModelPath(const Params& p);
+// The ONVIF model file (onvif_port); empty when off. Throws ConfigError for onvif_port in
+// lockstep, with visca_port, or without a model.
+std::string onvifModelPath(const Params& p);
 
 struct SimClock {
   bool lockstep = false;

@@ -1,6 +1,6 @@
 // ptz-driver: PTZ_SETPOINT -> the heads' motors -> PTZ_STATE, for real heads (VISCA over IP or
-// serial, Pelco-D; the simulator can pose as VISCA-over-IP cameras with --visca-port), built by
-// backend in head_factory. Safety whatever arrives:
+// serial, Pelco-D, GPIO, ONVIF; the simulator can pose as VISCA-over-IP or ONVIF cameras with
+// --visca-port or --onvif-port), built by backend in head_factory. Safety whatever arrives:
 // setpoints are clamped to the limits and slewed at most max_setpoint_rate, stale ones are
 // dropped, without a fresh one for deadman_s the heads hold where they are, and they stop on
 // exit (SIGINT/SIGTERM, or an exception out of the loop). The rules are HeadsDriver's; this
@@ -120,11 +120,12 @@ class DriverNode {
 
 int main(int argc, char** argv) {
   using namespace ptz;
-  Params params("ptz-driver",
-                "Drives real PTZ heads from PTZ_SETPOINT and publishes their measured "
-                "PTZ_STATE (VISCA over IP or serial, Pelco-D, GPIO DC motors), with limits, rate "
-                "limits, a deadman and stale-"
-                "setpoint dropping.");
+  Params params(
+      "ptz-driver",
+      "Drives real PTZ heads from PTZ_SETPOINT and publishes their measured "
+      "PTZ_STATE (VISCA over IP or serial, Pelco-D, GPIO DC motors, ONVIF), with limits, rate "
+      "limits, a deadman and stale-"
+      "setpoint dropping.");
   addTransportParams(params);
   driver::declareDriverParams(params);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {

@@ -4,6 +4,7 @@
 
 #include "common/plant.hpp"
 #include "ptz_driver/heads/gpio/gpio_backend.hpp"
+#include "ptz_driver/heads/onvif/head/onvif_head.hpp"
 #include "ptz_driver/heads/pelco_d/pelco_d_head.hpp"
 #include "ptz_driver/heads/visca/visca_ip_head.hpp"
 #include "ptz_driver/heads/visca/visca_serial_head.hpp"
@@ -11,7 +12,7 @@
 namespace ptz::driver {
 
 void declareBackendParams(Params& p) {
-  p.add("backend", "visca_ip", "visca_ip, visca_serial, pelco_d or gpio");
+  p.add("backend", "visca_ip", "visca_ip, visca_serial, pelco_d, gpio or onvif");
   p.add("visca_model", "",
         "backend visca_ip, visca_serial: camera model file (config/visca/*.yaml); required");
   p.add("left_host", "127.0.0.1", "backend visca_ip: left camera's IPv4 address");
@@ -49,6 +50,29 @@ void declareBackendParams(Params& p) {
         "backend pelco_d without position queries: time constant of the estimated motion "
         "of every axis",
         Range::above(0));
+  p.add("onvif_left_url", "http://127.0.0.1:8080",
+        "backend onvif: left camera (http://host:port; ptz-sim --onvif-port 8080 serves it)");
+  p.add("onvif_right_url", "http://127.0.0.1:8081",
+        "backend onvif: right camera (http://host:port; ptz-sim: the left's port + 1)");
+  p.add("onvif_user", "admin", "backend onvif: user of the WS-UsernameToken");
+  p.add("onvif_password_file", "",
+        "backend onvif: file whose first line is the cameras' password (else env "
+        "PTZ_ONVIF_PASSWORD; neither: requests unsigned)");
+  p.add("onvif_model", "config/onvif/generic_ptz.yaml",
+        "backend onvif: camera model file (config/onvif/*.yaml: the angle map)");
+  p.add("onvif_profile", "",
+        "backend onvif: media profile (token or name); empty: the first with PTZ");
+  p.add("onvif_timeout_ms", 1000.0, "ms",
+        "backend onvif: a request unanswered this long is a timeout (the camera is then "
+        "started again)",
+        Range::between(10, 60000));
+  p.add("onvif_status_rate_hz", 25.0, "Hz", "backend onvif: GetStatus at most this often",
+        Range::between(0.5, 200));
+  p.add("onvif_move_mode", "absolute",
+        "backend onvif: absolute (AbsoluteMove) or continuous (ContinuousMove's velocity "
+        "toward the setpoint, for cameras whose absolute moves are slow)");
+  p.add("onvif_continuous_gain", 2.0, "1/s",
+        "backend onvif, move mode continuous: velocity = gain x the error", Range::above(0));
   declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
 }
 
@@ -80,6 +104,32 @@ std::array<std::shared_ptr<Line>, 2> openLines(const Params& p, const std::strin
     }
   }
   return lines;
+}
+
+std::array<std::unique_ptr<PtzHead>, 2> makeOnvifHeads(const Params& p) {
+  const OnvifModel model = OnvifModel::load(required(p, "onvif_model", "onvif"));
+  OnvifHeadSettings s;
+  s.user = p.getString("onvif_user");
+  s.password = onvifHeadPassword(p.getPath("onvif_password_file"));
+  s.profile = p.getString("onvif_profile");
+  s.timeout_ms = p.getDouble("onvif_timeout_ms");
+  s.status_rate_hz = p.getDouble("onvif_status_rate_hz");
+  s.continuous_gain_per_s = p.getDouble("onvif_continuous_gain");
+  const std::string mode = p.getString("onvif_move_mode");
+  if (mode != "absolute" && mode != "continuous") {
+    throw p.invalid("onvif_move_mode", "must be absolute or continuous");
+  }
+  s.move_mode = mode == "continuous" ? OnvifMoveMode::kContinuous : OnvifMoveMode::kAbsolute;
+  std::array<std::unique_ptr<PtzHead>, 2> heads;
+  const char* const urls[2] = {"onvif_left_url", "onvif_right_url"};
+  for (size_t i = 0; i < 2; ++i) {
+    s.url = p.getString(urls[i]);
+    if (s.url.rfind("http://", 0) != 0 && s.url.rfind("https://", 0) != 0) {
+      throw p.invalid(urls[i], "must be http://host:port or https://host:port");
+    }
+    heads[i] = std::make_unique<OnvifHead>(model, s);
+  }
+  return heads;
 }
 
 }  // namespace
@@ -132,7 +182,8 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
     return heads;
   }
   if (backend == "gpio") return makeGpioHeads(p, open_gpio);
-  throw p.invalid("backend", "must be visca_ip, visca_serial, pelco_d or gpio");
+  if (backend == "onvif") return makeOnvifHeads(p);
+  throw p.invalid("backend", "must be visca_ip, visca_serial, pelco_d, gpio or onvif");
 }
 
 }  // namespace ptz::driver

@@ -9,7 +9,9 @@
 #   the simulator published; at the same time a --all --split-mb 1 recording whose files are
 #   each within the limit plus one message and together hold every event (their counts per
 #   channel equal the processes' own); --private-net with a command; bad input refused;
-# - scripts/demo warns when the simulator skips frames it cannot render in time.
+# - scripts/demo warns when the simulator skips frames it cannot render in time;
+# - scripts/demo --head onvif: ptz-sim's ONVIF cameras driven by ptz-driver close the loop
+#   (ptz-driver's PTZ_STATE, the cameras' setpoints applied, no head errors); a bad --head refused.
 #   test_scripts.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 src=$1 build=$2
@@ -197,6 +199,34 @@ skipped=$(sed -n 's/^ *"frames_skipped_late": \([0-9]*\).*/\1/p' "$work/demo/sum
 [ "${skipped:-0}" -gt 0 ] || bad "demo at 1080p/120 Hz: no frame skipped late in summary.json"
 grep -q "WARNING: ptz-sim skipped ${skipped:-x} frames late" <<<"$out" ||
   bad "demo at 1080p/120 Hz skipped ${skipped:-?} frames without saying so: $(tail -5 <<<"$out")"
+
+echo "== scripts/demo --head onvif: ptz-driver drives ptz-sim's ONVIF cameras"
+out=$("$src/scripts/demo" --no-build --head pelco 2>&1)
+rc=$?
+[ $rc -eq 2 ] && grep -q "head must be sim, visca or onvif" <<<"$out" ||
+  bad "demo --head pelco: exit $rc, not refused: $(tail -3 <<<"$out")"
+out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --head onvif --out "$work/demo-onvif" \
+  2>&1)
+rc=$?
+[ $rc -eq 0 ] || bad "demo --head onvif exits $rc: $(tail -5 <<<"$out")"
+summary=$("$build/tools/ptz-log-summary" --log "$work/demo-onvif/run.lcmlog" 2>/dev/null)
+# counter PROCESS NAME: the value in PROCESS's last status.
+counter() {
+  awk -v p="$1" -v n="$2" '/last status/ {q = $1} q == p && $1 == n {v = $2} END {print v + 0}' \
+    <<<"$summary"
+}
+states=$(awk '/last status/ {q = $1} q == "ptz-driver" && $1 == "out" && $2 == "PTZ_STATE" {print $3}' \
+  <<<"$summary")
+[ "${states:-0}" -gt 50 ] || bad "demo --head onvif: ptz-driver published ${states:-no} PTZ_STATE"
+[ "$(counter ptz-sim onvif_setpoints_applied)" -gt 20 ] ||
+  bad "demo --head onvif: $(counter ptz-sim onvif_setpoints_applied) ONVIF setpoints applied"
+[ "$(counter ptz-driver head_errors)" -eq 0 ] ||
+  bad "demo --head onvif: $(counter ptz-driver head_errors) head errors"
+[ "$(counter ptz-sim onvif_auth_refused)" -eq 0 ] || bad "demo --head onvif: requests refused"
+centring=$(sed -n 's/^ *"centering_rms_px": \([0-9.]*\).*/\1/p' "$work/demo-onvif/summary.json")
+awk -v c="${centring:-99}" 'BEGIN {exit !(c < 10)}' ||
+  bad "demo --head onvif: centring ${centring:-?} px RMS"
+echo "demo --head onvif: ${states:-0} PTZ_STATE from ptz-driver, centring ${centring:-?} px RMS"
 
 [ $fail -eq 0 ] && echo "PASSED"
 exit $fail

@@ -1,5 +1,6 @@
 // A scenario's objects read from a config file, and a bad one named.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 
@@ -141,4 +142,45 @@ TEST(SimSettings, BadValuesNameTheirSourceParameterAndValue) {
       r.err.rfind("ptz-sim: config file '" + objects + "', objects[0].speed_mps: unknown field", 0),
       0u)
       << r.err;
+}
+
+// ptz-sim's ONVIF cameras: what is missing, excluded or unreadable stops it with exit 2 and one
+// line; the password is never echoed.
+TEST(SimSettings, OnvifSettingsAreCheckedAndThePasswordNeverShown) {
+  auto sim = [](std::vector<std::string> args) {
+    args.insert(args.begin(), {PTZ_SIM_BIN, "--lcm-url", "memq://", "--frames", "1"});
+    return ptz::test::runProgram(args);
+  };
+  const std::string generic = PTZ_SOURCE_DIR "/config/onvif/generic_ptz.yaml";
+  const std::string bad_model = writeTemp(
+      "onvif_bad.yaml",
+      "%YAML:1.0\n---\nname: \"x\"\nmanufacturer: \"m\"\nmodel: \"m\"\npan_min_deg: -10\n"
+      "pan_max_deg: 10\ntilt_min_deg: -10\ntilt_max_deg: 10\npan_tilt_speed_max_deg_s: 10\n"
+      "zoom_normalised: [0.1, 1]\nzoom_ratios: [1, 2]\n");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"--onvif-port", "18000"},
+       "parameter 'onvif_port' needs 'onvif_model' (an ONVIF model file)"},
+      {{"--onvif-port", "18000", "--onvif-model", generic, "--visca-port", "18002", "--visca-model",
+        PTZ_SOURCE_DIR "/config/visca/sony_srg300.yaml"},
+       "parameters 'onvif_port' and 'visca_port' exclude each other (one plant)"},
+      {{"--onvif-port", "18000", "--onvif-model", generic, "--clock", "lockstep"},
+       "parameter 'onvif_port' needs clock realtime"},
+      {{"--onvif-port", "18000", "--onvif-model", bad_model},
+       "ONVIF model file '" + bad_model + "', zoom_normalised: must run from 0 to 1"},
+      {{"--onvif-port", "18000", "--onvif-model", generic, "--onvif-password-file",
+        "/nonexistent/onvif_password"},
+       "ONVIF password file '/nonexistent/onvif_password': cannot be read"},
+  };
+  for (const auto& [args, expected] : cases) {
+    const auto r = sim(args);
+    EXPECT_EQ(r.exit_code, 2) << expected;
+    EXPECT_EQ(r.err, "ptz-sim: " + expected + "\n");
+  }
+  // A run with a password (a port of its own: this test is not in a private network).
+  const std::string password_file = writeTemp("onvif_password", "p4ss-w0rd-never-shown\n");
+  const auto r = sim({"--onvif-port", std::to_string(20000 + getpid() % 20000), "--onvif-model",
+                      generic, "--onvif-password-file", password_file});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("p4ss"), std::string::npos);
+  EXPECT_EQ(r.err.find("p4ss"), std::string::npos);
 }

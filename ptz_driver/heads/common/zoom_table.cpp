@@ -7,8 +7,6 @@
 
 namespace ptz::driver {
 
-namespace {
-// At least two strictly increasing numbers within `range`.
 std::vector<double> readIncreasing(const cv::FileNode& root, const std::string& field,
                                    const std::string& where, const Range& range) {
   const std::vector<double> v = readNumberList(root, field, where, range, 2);
@@ -18,7 +16,6 @@ std::vector<double> readIncreasing(const cv::FileNode& root, const std::string& 
   }
   return v;
 }
-}  // namespace
 
 ZoomTable ZoomTable::read(const cv::FileNode& root, const std::string& where) {
   ZoomTable t;

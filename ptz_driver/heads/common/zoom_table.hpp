@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "common/config.hpp"  // Range
+
 namespace ptz::driver {
 
 struct ZoomTable {
@@ -17,6 +19,10 @@ struct ZoomTable {
   int position(double ratio) const;  // clamped to the table
   double ratio(int position) const;  // clamped to the table
 };
+
+// At least two strictly increasing numbers within `range` (a model file's table column).
+std::vector<double> readIncreasing(const cv::FileNode& root, const std::string& field,
+                                   const std::string& where, const Range& range);
 
 // Piecewise-linear lookup of x in the increasing table from -> to, clamped at both ends.
 double interpolate(const std::vector<double>& from, const std::vector<double>& to, double x);

@@ -56,9 +56,9 @@ TEST(SerialBackends, ParametersAreCheckedByName) {
   p.set("right_pelco_address", "1");
   EXPECT_NE(errorOf([&] { ptz::driver::makeHeads(p); }).find("two addresses"), std::string::npos);
   p.set("backend", "stepper");
-  EXPECT_EQ(
-      errorOf([&] { ptz::driver::makeHeads(p); }),
-      "set: parameter 'backend' must be visca_ip, visca_serial, pelco_d or gpio, got 'stepper'");
+  EXPECT_EQ(errorOf([&] { ptz::driver::makeHeads(p); }),
+            "set: parameter 'backend' must be visca_ip, visca_serial, pelco_d, gpio or onvif, got "
+            "'stepper'");
 }
 
 // right_visca_address 0: 2 on the left's line (a daisy chain), 1 on a line of its own.
