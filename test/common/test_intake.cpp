@@ -79,7 +79,7 @@ TEST_F(Intake, AFrameThatWentStaleWhileProcessedIsDroppedOnce) {
   ptz::FrameIntake intake(status, "STEREO_FRAME", limits, {64, 48}, "");
   const auto m = frameOf(64, 48, kNowUs - 10'000, 4);
   ASSERT_TRUE(intake.accept(m, kNowUs));
-  EXPECT_TRUE(intake.stillFresh(m, kNowUs + 400'000));  // processed within the age limit
+  EXPECT_TRUE(intake.stillFresh(m, kNowUs + 400'000));     // processed within the age limit
   EXPECT_FALSE(intake.stillFresh(m, kNowUs + 3'000'000));  // stopped for 3 s mid-frame
   EXPECT_EQ(status.counter("dropped_stale"), 1);
 }
