@@ -106,8 +106,33 @@ std::array<std::shared_ptr<Line>, 2> openLines(const Params& p, const std::strin
   return lines;
 }
 
-std::array<std::unique_ptr<PtzHead>, 2> makeOnvifHeads(const Params& p) {
-  const OnvifModel model = OnvifModel::load(required(p, "onvif_model", "onvif"));
+// The model's map replaced by the identity: pan and tilt -1..1 as "radians", zoom 0..1 as 1..2.
+OnvifModel unitModel(OnvifModel m) {
+  const double pan_units_per_rad = 2 / (m.pan_max_rad - m.pan_min_rad);
+  m.pan_tilt_speed_max_rad_s *= pan_units_per_rad;
+  m.pan_min_rad = m.tilt_min_rad = -1;
+  m.pan_max_rad = m.tilt_max_rad = 1;
+  m.zoom_normalised = {0, 1};
+  m.zoom_ratios = {1, 2};
+  return m;
+}
+
+// Units as "radians" (one unit a radian), zoom positions 0..P as ratios 1..P+1.
+ViscaModel unitModel(ViscaModel m) {
+  m.pan_min_rad *= m.pan_units_per_rad;
+  m.pan_max_rad *= m.pan_units_per_rad;
+  m.tilt_min_rad *= m.tilt_units_per_rad;
+  m.tilt_max_rad *= m.tilt_units_per_rad;
+  m.pan_units_per_rad = m.tilt_units_per_rad = 1;
+  const double last = m.zoom.positions.back();
+  m.zoom.positions = {0, last};
+  m.zoom.ratios = {1, last + 1};
+  return m;
+}
+
+std::array<std::unique_ptr<PtzHead>, 2> makeOnvifHeads(const Params& p, bool units) {
+  OnvifModel model = OnvifModel::load(required(p, "onvif_model", "onvif"));
+  if (units) model = unitModel(std::move(model));
   OnvifHeadSettings s;
   s.user = p.getString("onvif_user");
   s.password = onvifHeadPassword(p.getPath("onvif_password_file"));
@@ -132,14 +157,22 @@ std::array<std::unique_ptr<PtzHead>, 2> makeOnvifHeads(const Params& p) {
   return heads;
 }
 
-}  // namespace
-
-std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
-                                                  const GpioChipOpener& open_gpio) {
+std::array<std::unique_ptr<PtzHead>, 2> makeHeadsIn(const Params& p,
+                                                    const GpioChipOpener& open_gpio, bool units) {
   const std::string backend = p.getString("backend");
+  if (units && backend != "onvif" && backend != "visca_ip" && backend != "visca_serial") {
+    throw p.invalid("backend",
+                    "must be onvif, visca_ip or visca_serial to measure the angle map "
+                    "(a " +
+                        backend + " head has no position units)");
+  }
+  const auto visca_model = [&] {
+    ViscaModel m = ViscaModel::load(required(p, "visca_model", backend));
+    return units ? unitModel(std::move(m)) : m;
+  };
   std::array<std::unique_ptr<PtzHead>, 2> heads;
   if (backend == "visca_ip") {
-    const ViscaModel model = ViscaModel::load(required(p, "visca_model", backend));
+    const ViscaModel model = visca_model();
     heads[0] =
         std::make_unique<ViscaIpHead>(model, p.getString("left_host"), p.getInt("left_port"));
     heads[1] =
@@ -147,7 +180,7 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
     return heads;
   }
   if (backend == "visca_serial") {
-    const ViscaModel model = ViscaModel::load(required(p, "visca_model", backend));
+    const ViscaModel model = visca_model();
     const bool shared = p.getString("left_serial_device") == p.getString("right_serial_device");
     const int left = p.getInt("left_visca_address");  // addresses and ports: ranged
     const int right =
@@ -182,8 +215,19 @@ std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
     return heads;
   }
   if (backend == "gpio") return makeGpioHeads(p, open_gpio);
-  if (backend == "onvif") return makeOnvifHeads(p);
+  if (backend == "onvif") return makeOnvifHeads(p, units);
   throw p.invalid("backend", "must be visca_ip, visca_serial, pelco_d, gpio or onvif");
+}
+
+}  // namespace
+
+std::array<std::unique_ptr<PtzHead>, 2> makeHeads(const Params& p,
+                                                  const GpioChipOpener& open_gpio) {
+  return makeHeadsIn(p, open_gpio, false);
+}
+
+std::array<std::unique_ptr<PtzHead>, 2> makeUnitHeads(const Params& p) {
+  return makeHeadsIn(p, openHeadLines, true);
 }
 
 }  // namespace ptz::driver

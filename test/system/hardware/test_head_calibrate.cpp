@@ -1,0 +1,107 @@
+// ptz-head-calibrate against ptz-sim's cheap ONVIF cameras (a slow GetStatus, moves that ignore
+// speed, a zoom far from linear), started from the generic camera's model file whose zoom map is
+// wrong: the model file it writes holds the cheap camera's map (pan and tilt within 0.5 %, the
+// focal length within 2 % over the zoom range). Real processes, real HTTP/SOAP and LCM, realtime;
+// the scene static, as the calibration asks.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "common/rig.hpp"
+#include "ptz_driver/heads/onvif/head/onvif_model.hpp"
+#include "support/child_process.hpp"
+#include "support/lcm_wait.hpp"
+
+using ptz::test::ChildProcess;
+
+namespace {
+
+const std::string kConfig = PTZ_SOURCE_DIR "/config/";
+const std::string kUrl = ptz::test::kTestUrl;
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(HeadCalibrate, TheCheapOnvifCamerasMapIsMeasuredThroughTheirOnvifServers) {
+  const std::string out = "/tmp/ptz_head_calibrate_" + std::to_string(::getpid()) + ".yaml";
+  const std::string cheap = kConfig + "onvif/cheap_ptz.yaml";
+  // A static scene (the calibration's condition): the paper's, its plant's dead time included.
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", kUrl, "--config", kConfig + "sim_paper.yaml",
+                    "--clock", "realtime", "--onvif-port", "18100", "--onvif-model", cheap,
+                    "--duration-s", "400"});
+  const std::string log = "/tmp/ptz_head_calibrate_" + std::to_string(::getpid()) + ".log";
+  ChildProcess calibrate(
+      {PTZ_HEAD_CALIBRATE_BIN, "--lcm-url", kUrl, "--backend", "onvif", "--onvif-model",
+       kConfig + "onvif/generic_ptz.yaml", "--onvif-left-url", "http://127.0.0.1:18100",
+       "--onvif-right-url", "http://127.0.0.1:18101", "--output", out},
+      log);
+  const int code = calibrate.wait(std::chrono::seconds(280));
+  ASSERT_EQ(code, 0) << "ptz-head-calibrate said:\n" << readFile(log);
+  std::remove(log.c_str());
+  const ptz::driver::OnvifModel truth = ptz::driver::OnvifModel::load(cheap);
+  const ptz::driver::OnvifModel measured = ptz::driver::OnvifModel::load(out);
+  const double pan_scale = (truth.pan_max_rad - truth.pan_min_rad) / 2;
+  const double tilt_scale = (truth.tilt_max_rad - truth.tilt_min_rad) / 2;
+  EXPECT_NEAR((measured.pan_max_rad - measured.pan_min_rad) / 2 / pan_scale, 1, 0.005);
+  EXPECT_NEAR((measured.tilt_max_rad - measured.tilt_min_rad) / 2 / tilt_scale, 1, 0.005);
+  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+  double worst = 0;
+  for (int i = 0; i <= 100; ++i) {
+    const double u = i / 100.0;
+    const double f_true = rig.left.intrinsicsAt(truth.zoomRatio(u)).fx;
+    const double f_measured = rig.left.intrinsicsAt(measured.zoomRatio(u)).fx;
+    worst = std::max(worst, std::abs(f_measured / f_true - 1));
+    EXPECT_NEAR(f_measured / f_true, 1, 0.02) << "at zoom " << u;
+  }
+  std::printf("pan %.4f %%, tilt %.4f %%, focal length worst %.3f %%\n",
+              100 * ((measured.pan_max_rad - measured.pan_min_rad) / 2 / pan_scale - 1),
+              100 * ((measured.tilt_max_rad - measured.tilt_min_rad) / 2 / tilt_scale - 1),
+              100 * worst);
+  ::unlink(out.c_str());
+}
+
+// A camera that refuses the password, and a rig whose frames never come: each fails within its
+// timeout with the reason on stderr, the password not in it, and no model file written.
+TEST(HeadCalibrate, ARefusedPasswordOrNoFramesFailsWithTheReason) {
+  const std::string tmp = "/tmp/ptz_head_calibrate_refused_" + std::to_string(::getpid());
+  std::ofstream(tmp + ".pw") << "not-the-password\n";
+  ::setenv("PTZ_SIM_ONVIF_PASSWORD", "the-password", 1);
+  const std::string generic = kConfig + "onvif/generic_ptz.yaml";
+  {
+    ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", kUrl, "--config", kConfig + "sim_default.yaml",
+                      "--onvif-port", "18110", "--onvif-model", generic, "--duration-s", "60"});
+    ChildProcess calibrate({PTZ_HEAD_CALIBRATE_BIN, "--lcm-url", kUrl, "--backend", "onvif",
+                            "--onvif-model", generic, "--onvif-left-url", "http://127.0.0.1:18110",
+                            "--onvif-right-url", "http://127.0.0.1:18111", "--onvif-password-file",
+                            tmp + ".pw", "--move-timeout-s", "3", "--output", tmp + ".yaml"},
+                           tmp + ".log");
+    EXPECT_EQ(calibrate.wait(std::chrono::seconds(30)), 1);
+  }
+  ::unsetenv("PTZ_SIM_ONVIF_PASSWORD");
+  const std::string refused = readFile(tmp + ".log");
+  EXPECT_NE(refused.find("did not reach"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("NotAuthorized"), std::string::npos) << refused;
+  EXPECT_EQ(refused.find("the-password"), std::string::npos) << "a password is never printed";
+  EXPECT_NE(::access((tmp + ".yaml").c_str(), F_OK), 0) << "no model file from a failed run";
+  {
+    ChildProcess calibrate(
+        {PTZ_HEAD_CALIBRATE_BIN, "--lcm-url", kUrl, "--backend", "onvif", "--onvif-model", generic,
+         "--move-timeout-s", "2", "--output", tmp + ".yaml"},
+        tmp + ".log");
+    EXPECT_EQ(calibrate.wait(std::chrono::seconds(30)), 1);
+  }
+  const std::string silent = readFile(tmp + ".log");
+  EXPECT_NE(silent.find("no usable STEREO_FRAME for 2 s"), std::string::npos) << silent;
+  std::remove((tmp + ".pw").c_str());
+  std::remove((tmp + ".log").c_str());
+}
+
+}  // namespace
