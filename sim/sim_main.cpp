@@ -56,6 +56,7 @@ class SimNode {
       }
       OnvifServerOptions options;
       options.first_port = p.getInt("onvif_port");
+      options.discovery = p.getBool("onvif_discovery");
       onvif_ = std::make_unique<OnvifCameras>(
           driver::OnvifModel::load(onvif_model), cameras, options,
           [this](const OnvifCameras::Step& step) {
@@ -121,6 +122,10 @@ class SimNode {
       status_.setCounter("onvif_connections_refused", c.connections_refused);
       status_.setCounter("onvif_connections_timed_out", c.connections_timed_out);
       status_.setCounter("onvif_setpoints_applied", onvif_->setpointsApplied());
+      const DiscoveryCounters d = onvif_->discoveryCounters();
+      status_.setCounter("onvif_probes_answered", d.answered);
+      status_.setCounter("onvif_probes_ignored", d.ignored);
+      status_.setCounter("onvif_probes_dropped", d.oversize + d.malformed);
     }
     if (!visca_) return;
     status_.setCounter("visca_packets", visca_->packets());

@@ -374,15 +374,38 @@ OnvifCameras::OnvifCameras(const driver::OnvifModel& model,
   });
   server_ = std::make_unique<OnvifServer>(model, cameras, options, home);
   applied_ = home;
+  if (!options.discovery) return;
+  std::vector<driver::DiscoveredCamera> found;
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const int port = server_->port(side);
+    char endpoint[64];
+    // Stable for the port: a camera keeps its endpoint across restarts.
+    std::snprintf(endpoint, sizeof endpoint, "urn:uuid:5054a5a3-0000-4000-8000-%012x", port);
+    found.push_back(
+        {endpoint, "http://" + options.host + ":" + std::to_string(port) + "/onvif/device_service",
+         std::string("ptz-sim ") + (side == Side::kLeft ? "left" : "right"), model.model});
+  }
+  try {
+    discovery_ = std::make_unique<DiscoveryResponder>(found, options.discovery_options);
+  } catch (const std::runtime_error& e) {
+    // The cameras still serve HTTP; only finding them is off.
+    std::fprintf(stderr, "ptz-sim: WS-Discovery off: %s\n", e.what());
+  }
 }
 
 void OnvifCameras::start() {
   thread_ = std::thread([this] { serve(); });
+  if (discovery_) discovery_->start();
 }
 
 void OnvifCameras::stop() {
   quit_ = true;
   if (thread_.joinable()) thread_.join();
+  if (discovery_) discovery_->stop();
+}
+
+DiscoveryCounters OnvifCameras::discoveryCounters() const {
+  return discovery_ ? discovery_->counters() : DiscoveryCounters{};
 }
 
 OnvifServerCounters OnvifCameras::counters() const {

@@ -20,6 +20,7 @@
 
 #include "common/rig.hpp"
 #include "ptz_driver/emulators/onvif/onvif_camera_emulator.hpp"
+#include "sim/onvif/discovery_responder.hpp"
 
 namespace ptz::sim {
 
@@ -29,6 +30,8 @@ struct OnvifServerOptions {
   size_t max_request_bytes = 64 * 1024;  // head and body; 413 beyond
   size_t max_connections = 32;           // both cameras; 503 and closed beyond
   double idle_timeout_s = 10;            // a connection silent (or a request unfinished) this long
+  bool discovery = false;                // OnvifCameras: answer WS-Discovery probes
+  DiscoveryResponderOptions discovery_options;
 };
 
 struct OnvifServerCounters {
@@ -108,11 +111,14 @@ class OnvifCameras {
   OnvifServerCounters counters() const;
   int64_t setpointsApplied() const { return setpoints_applied_; }
   int port(Side side) const { return server_->port(side); }
+  // Zero when discovery is off (or could not start: stderr said why).
+  DiscoveryCounters discoveryCounters() const;
 
  private:
   void serve();
 
   std::unique_ptr<OnvifServer> server_;
+  std::unique_ptr<DiscoveryResponder> discovery_;
   Motors motors_;
   std::array<PtzPose, 2> applied_{};
   std::thread thread_;
