@@ -57,6 +57,10 @@ class SimNode {
       OnvifServerOptions options;
       options.first_port = p.getInt("onvif_port");
       options.discovery = p.getBool("onvif_discovery");
+      options.http_digest = p.getBool("onvif_http_digest");
+      if (options.http_digest && password.empty()) {
+        throw ConfigError("parameter 'onvif_http_digest' needs a password (onvif_password_file)");
+      }
       onvif_ = std::make_unique<OnvifCameras>(
           driver::OnvifModel::load(onvif_model), cameras, options,
           [this](const OnvifCameras::Step& step) {
