@@ -56,6 +56,11 @@ class SimNode {
       }
       OnvifServerOptions options;
       options.first_port = p.getInt("onvif_port");
+      options.discovery = p.getBool("onvif_discovery");
+      options.http_digest = p.getBool("onvif_http_digest");
+      if (options.http_digest && password.empty()) {
+        throw ConfigError("parameter 'onvif_http_digest' needs a password (onvif_password_file)");
+      }
       onvif_ = std::make_unique<OnvifCameras>(
           driver::OnvifModel::load(onvif_model), cameras, options,
           [this](const OnvifCameras::Step& step) {
@@ -121,6 +126,10 @@ class SimNode {
       status_.setCounter("onvif_connections_refused", c.connections_refused);
       status_.setCounter("onvif_connections_timed_out", c.connections_timed_out);
       status_.setCounter("onvif_setpoints_applied", onvif_->setpointsApplied());
+      const DiscoveryCounters d = onvif_->discoveryCounters();
+      status_.setCounter("onvif_probes_answered", d.answered);
+      status_.setCounter("onvif_probes_ignored", d.ignored);
+      status_.setCounter("onvif_probes_dropped", d.oversize + d.malformed);
     }
     if (!visca_) return;
     status_.setCounter("visca_packets", visca_->packets());

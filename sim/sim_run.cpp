@@ -43,6 +43,11 @@ void declareSimSceneParams(Params& p) {
   p.add("onvif_password_file", "",
         "file whose first line is the ONVIF password (else env PTZ_SIM_ONVIF_PASSWORD; neither: "
         "no authentication)");
+  p.add("onvif_discovery", true,
+        "the ONVIF cameras answer WS-Discovery probes (UDP 3702, group 239.255.255.250)");
+  p.add("onvif_http_digest", false,
+        "the ONVIF cameras demand HTTP digest authentication (MD5) besides WS-UsernameToken; needs "
+        "a password");
   p.add("onvif_clock_offset_s", 0.0, "s",
         "the ONVIF cameras' clock minus the host's (clients must correct for it)",
         Range::between(-1e9, 1e9));

@@ -17,6 +17,7 @@
 #include "ptz_driver/heads/common/heads_stop.hpp"
 #include "ptz_driver/heads/head_factory.hpp"
 #include "ptz_driver/heads/heads_driver.hpp"
+#include "ptz_driver/heads/onvif/discovery/discover_command.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 
@@ -128,6 +129,9 @@ int main(int argc, char** argv) {
       "setpoint dropping.");
   addTransportParams(params);
   driver::declareDriverParams(params);
+  driver::declareDiscoverParams(params);
+  // --discover finds ONVIF cameras and exits, without LCM.
+  if (const auto code = driver::runDiscoverIfAsked(argc, argv, params)) return *code;
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
     driver::DriverNode node(p, &lcm);
     return node.run();

@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "common/config.hpp"
+#include "ptz_driver/heads/onvif/ws_security.hpp"  // randomNonce
 
 namespace ptz::sim {
 
@@ -31,6 +32,8 @@ const char* reason(int status) {
       return "OK";
     case 400:
       return "Bad Request";
+    case 401:
+      return "Unauthorized";
     case 404:
       return "Not Found";
     case 405:
@@ -98,6 +101,9 @@ OnvifServer::OnvifServer(const driver::OnvifModel& model,
     : options_(options) {
   for (size_t i = 0; i < 2; ++i) {
     cameras_.emplace_back(model, cameras[i], home[i]);
+    digest_[i].user = cameras[i].user;
+    digest_[i].password = cameras[i].password;
+    digest_[i].nonce = driver::md5Hex(onvif::randomNonce());  // 32 hex digits
     const int port = options.first_port > 0 ? options.first_port + static_cast<int>(i) : 0;
     try {
       listen_fds_[i] = listenOn(options.host, port, &ports_[i]);
@@ -151,8 +157,9 @@ void OnvifServer::accept(size_t camera, double host_now_s) {
   }
 }
 
-void OnvifServer::respond(Connection* c, int status, const std::string& body, bool close) {
-  c->out += "HTTP/1.1 " + std::to_string(status) + " " + reason(status) + "\r\n";
+void OnvifServer::respond(Connection* c, int status, const std::string& body, bool close,
+                          const std::string& extra_headers) {
+  c->out += "HTTP/1.1 " + std::to_string(status) + " " + reason(status) + "\r\n" + extra_headers;
   if (!body.empty()) c->out += "Content-Type: application/soap+xml; charset=utf-8\r\n";
   c->out += "Content-Length: " + std::to_string(body.size()) + "\r\n";
   c->out += close ? "Connection: close\r\n\r\n" : "Connection: keep-alive\r\n\r\n";
@@ -199,7 +206,7 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
     // Headers.
     bool keep_alive = version == "HTTP/1.1";
     long long content_length = -1;
-    std::string host;
+    std::string host, authorization;
     bool expect_continue = false;
     for (size_t pos = line_end + 2; pos < head_end;) {
       const size_t eol = c->in.find("\r\n", pos);
@@ -225,6 +232,8 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
         if (v.find("keep-alive") != std::string::npos) keep_alive = true;
       } else if (name == "host") {
         host = value;
+      } else if (name == "authorization") {
+        authorization = value;
       } else if (name == "expect") {
         expect_continue = lower(value) == "100-continue";
       }
@@ -251,6 +260,15 @@ bool OnvifServer::handleInput(Connection* c, double host_now_s, const PtzPose& n
       return bad(404);
     }
     if (method != "POST") return bad(405);
+    std::string why;
+    if (options_.http_digest &&
+        !driver::digestValid(authorization, method, target, digest_[c->camera], &why)) {
+      // The first request of a client comes without: that is the challenge, not a refusal.
+      ++(authorization.empty() ? counters_.digest_challenges : digest_refused_);
+      respond(c, 401, "", !keep_alive,
+              "WWW-Authenticate: " + driver::digestChallenge(digest_[c->camera]) + "\r\n");
+      continue;
+    }
     const std::string our_port = std::to_string(ports_[c->camera]);
     if (!plainHost(host)) {
       host = options_.host + ":" + our_port;
@@ -352,7 +370,7 @@ void OnvifServer::serve(double host_now_s, const std::array<PtzPose, 2>& now) {
     refused += cam.authRefused();
   }
   counters_.soap_faults = faults;
-  counters_.auth_refused = refused;
+  counters_.auth_refused = refused + digest_refused_;
 }
 
 PtzPose OnvifServer::setpoint(Side side, double host_now_s) const {
@@ -374,15 +392,38 @@ OnvifCameras::OnvifCameras(const driver::OnvifModel& model,
   });
   server_ = std::make_unique<OnvifServer>(model, cameras, options, home);
   applied_ = home;
+  if (!options.discovery) return;
+  std::vector<driver::DiscoveredCamera> found;
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const int port = server_->port(side);
+    char endpoint[64];
+    // Stable for the port: a camera keeps its endpoint across restarts.
+    std::snprintf(endpoint, sizeof endpoint, "urn:uuid:5054a5a3-0000-4000-8000-%012x", port);
+    found.push_back(
+        {endpoint, "http://" + options.host + ":" + std::to_string(port) + "/onvif/device_service",
+         std::string("ptz-sim ") + (side == Side::kLeft ? "left" : "right"), model.model});
+  }
+  try {
+    discovery_ = std::make_unique<DiscoveryResponder>(found, options.discovery_options);
+  } catch (const std::runtime_error& e) {
+    // The cameras still serve HTTP; only finding them is off.
+    std::fprintf(stderr, "ptz-sim: WS-Discovery off: %s\n", e.what());
+  }
 }
 
 void OnvifCameras::start() {
   thread_ = std::thread([this] { serve(); });
+  if (discovery_) discovery_->start();
 }
 
 void OnvifCameras::stop() {
   quit_ = true;
   if (thread_.joinable()) thread_.join();
+  if (discovery_) discovery_->stop();
+}
+
+DiscoveryCounters OnvifCameras::discoveryCounters() const {
+  return discovery_ ? discovery_->counters() : DiscoveryCounters{};
 }
 
 OnvifServerCounters OnvifCameras::counters() const {

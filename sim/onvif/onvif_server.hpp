@@ -19,7 +19,9 @@
 #include <functional>
 
 #include "common/rig.hpp"
+#include "ptz_driver/emulators/onvif/http_digest.hpp"
 #include "ptz_driver/emulators/onvif/onvif_camera_emulator.hpp"
+#include "sim/onvif/discovery_responder.hpp"
 
 namespace ptz::sim {
 
@@ -29,13 +31,19 @@ struct OnvifServerOptions {
   size_t max_request_bytes = 64 * 1024;  // head and body; 413 beyond
   size_t max_connections = 32;           // both cameras; 503 and closed beyond
   double idle_timeout_s = 10;            // a connection silent (or a request unfinished) this long
+  bool discovery = false;                // OnvifCameras: answer WS-Discovery probes
+  // HTTP digest (MD5) demanded of every request besides WS-UsernameToken, with the cameras'
+  // user and password: 401 and the challenge without it.
+  bool http_digest = false;
+  DiscoveryResponderOptions discovery_options;
 };
 
 struct OnvifServerCounters {
   int64_t requests = 0;             // HTTP requests answered (200 or a SOAP fault)
   int64_t bad_requests = 0;         // 400, 404, 405, 413: not a request the cameras could read
   int64_t soap_faults = 0;          // SOAP faults the cameras answered (auth refusals included)
-  int64_t auth_refused = 0;         // ter:NotAuthorized
+  int64_t auth_refused = 0;         // ter:NotAuthorized, and 401s (HTTP digest) after the first
+  int64_t digest_challenges = 0;    // 401s answering a request without Authorization
   int64_t connections_refused = 0;  // beyond max_connections
   int64_t connections_timed_out = 0;
 };
@@ -78,12 +86,15 @@ class OnvifServer {
   void accept(size_t camera, double host_now_s);
   // Handles every complete request in c.in; false when the connection is to be closed now.
   bool handleInput(Connection* c, double host_now_s, const PtzPose& now);
-  void respond(Connection* c, int status, const std::string& body, bool close);
+  void respond(Connection* c, int status, const std::string& body, bool close,
+               const std::string& extra_headers = "");
   static bool flush(Connection* c);  // false on a write error
 
   std::array<int, 2> listen_fds_{-1, -1};
   std::array<int, 2> ports_{0, 0};
   std::vector<driver::OnvifCameraEmulator> cameras_;
+  std::array<driver::DigestCredentials, 2> digest_;  // http_digest: each camera's
+  int64_t digest_refused_ = 0;
   OnvifServerOptions options_;
   std::vector<std::unique_ptr<Connection>> connections_;
   OnvifServerCounters counters_;
@@ -108,11 +119,14 @@ class OnvifCameras {
   OnvifServerCounters counters() const;
   int64_t setpointsApplied() const { return setpoints_applied_; }
   int port(Side side) const { return server_->port(side); }
+  // Zero when discovery is off (or could not start: stderr said why).
+  DiscoveryCounters discoveryCounters() const;
 
  private:
   void serve();
 
   std::unique_ptr<OnvifServer> server_;
+  std::unique_ptr<DiscoveryResponder> discovery_;
   Motors motors_;
   std::array<PtzPose, 2> applied_{};
   std::thread thread_;

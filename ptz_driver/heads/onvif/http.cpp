@@ -2,6 +2,8 @@
 
 #include <curl/curl.h>
 
+#include <algorithm>
+#include <cctype>
 #include <mutex>
 #include <stdexcept>
 
@@ -12,6 +14,7 @@ struct Sink {
   std::string body;
   std::size_t max_bytes = 0;
   bool too_large = false;
+  bool digest_asked = false;  // a WWW-Authenticate: Digest header came
 };
 
 // Refusing the bytes (returning less than given) makes libcurl abort the transfer with
@@ -27,12 +30,31 @@ std::size_t write(char* data, std::size_t size, std::size_t count, void* user) {
   return n;
 }
 
+// Each header line of the reply (a 401's too): only whether Digest is offered is kept.
+std::size_t header(char* data, std::size_t size, std::size_t count, void* user) {
+  Sink* sink = static_cast<Sink*>(user);
+  const std::size_t n = size * count;
+  std::string line(data, std::min<std::size_t>(n, 256));
+  for (char& ch : line) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (line.rfind("www-authenticate:", 0) == 0 && line.find("digest") != std::string::npos) {
+    sink->digest_asked = true;
+  }
+  return n;
+}
+
 struct Headers {
   curl_slist* list = nullptr;
   ~Headers() { curl_slist_free_all(list); }
 };
 
 }  // namespace
+
+std::string httpStatusText(long status) {
+  if (status == 401) {
+    return "HTTP 401: authentication refused (HTTP digest: user or password wrong, or none given)";
+  }
+  return "HTTP " + std::to_string(status);
+}
 
 HttpClient::HttpClient() {
   // curl_global_init is not thread-safe: once per process, before any handle.
@@ -48,6 +70,21 @@ HttpClient::~HttpClient() {
 
 Result<HttpReply> HttpClient::post(std::string_view url, std::string_view action,
                                    std::string_view message, const HttpOptions& options) {
+  const bool can_digest = !options.http_password.empty();
+  bool digest_asked = false;
+  auto reply = perform(url, action, message, options, digest_ && can_digest, &digest_asked);
+  // A 401 asking for Digest: the same request again with it, and every later one too (libcurl
+  // sends a Digest request's body only after the challenge, so it is not on from the start).
+  if (reply && reply->status == 401 && digest_asked && can_digest && !digest_) {
+    digest_ = true;
+    reply = perform(url, action, message, options, true, &digest_asked);
+  }
+  return reply;
+}
+
+Result<HttpReply> HttpClient::perform(std::string_view url, std::string_view action,
+                                      std::string_view message, const HttpOptions& options,
+                                      bool digest, bool* digest_asked) {
   if (action.find_first_of("\"\r\n") != std::string_view::npos) {
     return Error{"SOAP action holds a quote or a line break", std::nullopt};
   }
@@ -76,11 +113,20 @@ Result<HttpReply> HttpClient::post(std::string_view url, std::string_view action
   curl_easy_setopt(c, CURLOPT_HTTPHEADER, headers.list);
   curl_easy_setopt(c, CURLOPT_WRITEFUNCTION, write);
   curl_easy_setopt(c, CURLOPT_WRITEDATA, &sink);
+  curl_easy_setopt(c, CURLOPT_HEADERFUNCTION, header);
+  curl_easy_setopt(c, CURLOPT_HEADERDATA, &sink);
   curl_easy_setopt(c, CURLOPT_ERRORBUFFER, why);
+  if (digest) {
+    curl_easy_setopt(c, CURLOPT_HTTPAUTH, CURLAUTH_DIGEST);
+    curl_easy_setopt(c, CURLOPT_USERNAME, options.http_user.c_str());
+    curl_easy_setopt(c, CURLOPT_PASSWORD, options.http_password.c_str());
+  }
   const CURLcode code = curl_easy_perform(c);
   // The handle must not keep pointers to this call's locals.
   curl_easy_setopt(c, CURLOPT_HTTPHEADER, nullptr);
   curl_easy_setopt(c, CURLOPT_ERRORBUFFER, nullptr);
+  curl_easy_setopt(c, CURLOPT_HEADERDATA, nullptr);
+  *digest_asked = sink.digest_asked;
   const std::string where = " (" + url_text + ")";
   if (sink.too_large) {
     return Error{"reply larger than " + std::to_string(options.max_reply_bytes) + " bytes" + where,

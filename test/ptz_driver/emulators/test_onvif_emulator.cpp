@@ -7,7 +7,9 @@
 
 #include "common/plant.hpp"
 #include "ptz_driver/emulators/emulated_motors.hpp"
+#include "ptz_driver/emulators/onvif/http_digest.hpp"
 #include "ptz_driver/emulators/onvif/onvif_camera_emulator.hpp"
+#include "ptz_driver/emulators/onvif/onvif_discovery.hpp"
 #include "ptz_driver/heads/onvif/ws_security.hpp"
 #include "ptz_driver/heads/onvif/xml.hpp"
 
@@ -317,4 +319,49 @@ TEST(OnvifEmulator, FaultsForBadRequests) {
   EXPECT_EQ(cam.faults(), 15);
   // Nothing of that moved the head.
   EXPECT_NEAR(cam.setpoint(10).pan_rad, 0, 1e-12);
+}
+
+TEST(OnvifDiscoveryEmulator, ReadsProbesAsClientsSendThem) {
+  // npm onvif's Probe: default namespace, no prefixes, an empty Scopes.
+  const std::string npm =
+      "<Envelope xmlns=\"http://www.w3.org/2003/05/soap-envelope\" "
+      "xmlns:dn=\"http://www.onvif.org/ver10/network/wsdl\"><Header>"
+      "<wsa:MessageID xmlns:wsa=\"http://schemas.xmlsoap.org/ws/2004/08/addressing\">urn:uuid:42"
+      "</wsa:MessageID><wsa:Action xmlns:wsa=\"http://schemas.xmlsoap.org/ws/2004/08/addressing\">"
+      "http://schemas.xmlsoap.org/ws/2005/04/discovery/Probe</wsa:Action></Header><Body>"
+      "<Probe xmlns=\"http://schemas.xmlsoap.org/ws/2005/04/discovery\">"
+      "<Types>dn:NetworkVideoTransmitter</Types><Scopes /></Probe></Body></Envelope>";
+  const ptz::driver::ProbeRead r = ptz::driver::readProbe(npm);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.message_id, "urn:uuid:42");
+  EXPECT_TRUE(r.wants_camera);
+  std::string printers = npm;
+  printers.replace(printers.find("dn:NetworkVideoTransmitter"), 26, "dn:Printer");
+  EXPECT_FALSE(ptz::driver::readProbe(printers).wants_camera);
+  std::string hello = npm;
+  hello.replace(hello.find("discovery/Probe"), 15, "discovery/Hello");
+  EXPECT_FALSE(ptz::driver::readProbe(hello).ok);
+  EXPECT_FALSE(ptz::driver::readProbe(std::string(600 * 1024, ' ')).ok);
+  EXPECT_EQ(ptz::driver::scopeEncoded("ptz-sim left/1"), "ptz-sim%20left%2F1");
+}
+
+TEST(HttpDigest, TheRfc2617Example) {
+  // RFC 2617 section 3.5: Mufasa's request, response 6629fae49393a05397450978507c4ef1.
+  ptz::driver::DigestCredentials c{"Mufasa", "Circle Of Life", "testrealm@host.com",
+                                   "dcd98b7102dd2f0e8b11d0f600bfb0c093"};
+  const std::string auth =
+      "Digest username=\"Mufasa\", realm=\"testrealm@host.com\", "
+      "nonce=\"dcd98b7102dd2f0e8b11d0f600bfb0c093\", uri=\"/dir/index.html\", qop=auth, "
+      "nc=00000001, cnonce=\"0a4f113b\", response=\"6629fae49393a05397450978507c4ef1\", "
+      "opaque=\"5ccc069c403ebaf9f0171e9517f40e41\"";
+  std::string why;
+  EXPECT_TRUE(ptz::driver::digestValid(auth, "GET", "/dir/index.html", c, &why)) << why;
+  EXPECT_FALSE(ptz::driver::digestValid(auth, "POST", "/dir/index.html", c, &why));
+  c.password = "Circle of Life";
+  EXPECT_FALSE(ptz::driver::digestValid(auth, "GET", "/dir/index.html", c, &why));
+  EXPECT_EQ(why, "wrong response (wrong password?)");
+  EXPECT_FALSE(ptz::driver::digestValid("Basic TXVmYXNhOg==", "GET", "/", c, &why));
+  EXPECT_FALSE(ptz::driver::digestValid("Digest username=\"Mufasa", "GET", "/", c, &why));
+  EXPECT_FALSE(ptz::driver::digestValid("Digest " + std::string(4000, 'a'), "GET", "/", c, &why));
+  EXPECT_EQ(ptz::driver::md5Hex(""), "d41d8cd98f00b204e9800998ecf8427e");  // RFC 1321
 }

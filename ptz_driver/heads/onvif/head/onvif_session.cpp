@@ -32,6 +32,8 @@ OnvifSession::OnvifSession(OnvifModel model, OnvifHeadSettings settings,
   const long timeout_ms = std::max(1L, std::lround(settings_.timeout_ms));
   http_options_.connect_timeout_ms = timeout_ms;
   http_options_.total_timeout_ms = timeout_ms;
+  http_options_.http_user = settings_.user;
+  http_options_.http_password = settings_.password;
 }
 
 OnvifOutcome OnvifSession::post(const std::string& url, const onvif::Request& r, std::string* body,
@@ -59,7 +61,7 @@ template <typename T>
 OnvifOutcome OnvifSession::check(const std::string& op, const onvif::Result<T>& r) const {
   if (r.ok()) {
     if (last_http_status_ != 200) {
-      return {OnvifFailure::kMalformed, op + ": HTTP " + std::to_string(last_http_status_)};
+      return {OnvifFailure::kMalformed, op + ": " + onvif::httpStatusText(last_http_status_)};
     }
     return {};
   }
@@ -70,7 +72,7 @@ OnvifOutcome OnvifSession::check(const std::string& op, const onvif::Result<T>& 
   }
   // No SOAP at all: an HTTP error page is not a malformed reply but a refusal.
   if (last_http_status_ != 200) {
-    return {OnvifFailure::kFault, op + ": HTTP " + std::to_string(last_http_status_)};
+    return {OnvifFailure::kFault, op + ": " + onvif::httpStatusText(last_http_status_)};
   }
   return {OnvifFailure::kMalformed, op + ": " + r.error()};
 }
