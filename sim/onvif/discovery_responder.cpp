@@ -12,6 +12,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "ptz_driver/heads/onvif/ws_security.hpp"
+
 namespace ptz::sim {
 namespace {
 
@@ -134,7 +136,7 @@ void DiscoveryResponder::handle(const char* bytes, std::size_t n, const void* fr
   for (const driver::DiscoveredCamera& c : cameras_) {
     // A fresh MessageID per answer (WS-Addressing), relating to the Probe's.
     const std::string reply =
-        driver::probeMatchesMessage(c, probe.message_id, driver::randomUuidUrn());
+        driver::probeMatchesMessage(c, probe.message_id, onvif::randomMessageId());
     if (::sendto(fd_, reply.data(), reply.size(), MSG_NOSIGNAL, static_cast<const sockaddr*>(from),
                  from_len) != static_cast<ssize_t>(reply.size())) {
       ++send_errors_;

@@ -17,7 +17,7 @@
 #include <stdexcept>
 
 #include "common/config.hpp"
-#include "ptz_driver/heads/onvif/ws_security.hpp"  // randomNonce
+#include "ptz_driver/heads/onvif/ws_security.hpp"
 
 namespace ptz::sim {
 
@@ -454,16 +454,7 @@ void OnvifCameras::serve() {
 }
 
 std::string onvifPassword(const std::string& file) {
-  if (!file.empty()) {
-    std::ifstream in(file);
-    if (!in) throw ConfigError("ONVIF password file '" + file + "': cannot be read");
-    std::string line;
-    std::getline(in, line);
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    return line;
-  }
-  const char* env = std::getenv("PTZ_SIM_ONVIF_PASSWORD");
-  return env ? env : "";
+  return onvif::passwordFromFileOrEnv(file, "PTZ_SIM_ONVIF_PASSWORD");
 }
 
 }  // namespace ptz::sim

@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "ptz_driver/heads/onvif/ws_security.hpp"  // randomNonce
+#include "ptz_driver/heads/onvif/ws_security.hpp"
 #include "ptz_driver/heads/onvif/xml.hpp"
 
 namespace ptz::driver {
@@ -63,20 +63,6 @@ ProbeRead readProbe(std::string_view bytes) {
   }
   r.ok = true;
   return r;
-}
-
-std::string randomUuidUrn() {
-  std::string b = onvif::randomNonce();
-  b[6] = static_cast<char>((b[6] & 0x0F) | 0x40);
-  b[8] = static_cast<char>((b[8] & 0x3F) | 0x80);
-  std::string id = "urn:uuid:";
-  char hex[3];
-  for (int i = 0; i < 16; ++i) {
-    if (i == 4 || i == 6 || i == 8 || i == 10) id += '-';
-    std::snprintf(hex, sizeof hex, "%02x", static_cast<unsigned char>(b[i]));
-    id += hex;
-  }
-  return id;
 }
 
 std::string scopeEncoded(std::string_view value) {

@@ -32,9 +32,6 @@ struct DiscoveredCamera {
 std::string probeMatchesMessage(const DiscoveredCamera& camera, std::string_view relates_to,
                                 std::string_view message_id);
 
-// urn:uuid:… of 16 random bytes (version 4), a fresh MessageID.
-std::string randomUuidUrn();
-
 // A scope's value: RFC 3986 percent-encoding of everything but unreserved characters.
 std::string scopeEncoded(std::string_view value);
 

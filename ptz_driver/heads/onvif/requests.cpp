@@ -140,18 +140,4 @@ std::string probeMessage(std::string_view message_id) {
          "<d:Types>dn:NetworkVideoTransmitter</d:Types></d:Probe></s:Body></s:Envelope>";
 }
 
-std::string randomMessageId() {
-  std::string b = randomNonce();
-  b[6] = static_cast<char>((b[6] & 0x0F) | 0x40);  // version 4
-  b[8] = static_cast<char>((b[8] & 0x3F) | 0x80);  // RFC 4122 variant
-  std::string id = "urn:uuid:";
-  char hex[3];
-  for (int i = 0; i < 16; ++i) {
-    if (i == 4 || i == 6 || i == 8 || i == 10) id += '-';
-    std::snprintf(hex, sizeof hex, "%02x", static_cast<unsigned char>(b[i]));
-    id += hex;
-  }
-  return id;
-}
-
 }  // namespace ptz::onvif

@@ -64,7 +64,5 @@ Request setPreset(std::string_view profile_token, std::string_view preset_name,
 // NetworkVideoTransmitters, sent by UDP to 239.255.255.250:3702; cameras answer ProbeMatches
 // (device_replies.hpp) relating to `message_id`.
 std::string probeMessage(std::string_view message_id);
-// urn:uuid:… with 16 random bytes (a version 4 UUID).
-std::string randomMessageId();
 
 }  // namespace ptz::onvif

@@ -7,9 +7,12 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
+#include <fstream>
 #include <stdexcept>
 
+#include "common/config.hpp"  // ConfigError
 #include "ptz_driver/heads/onvif/xml.hpp"
 
 namespace ptz::onvif {
@@ -55,6 +58,33 @@ std::string passwordDigest(std::string_view nonce, std::string_view created,
     throw std::runtime_error("OpenSSL could not compute SHA-1");
   }
   return base64Encode(std::string_view(reinterpret_cast<const char*>(sha), length));
+}
+
+std::string randomMessageId() {
+  std::string b = randomNonce();
+  b[6] = static_cast<char>((b[6] & 0x0F) | 0x40);  // version 4
+  b[8] = static_cast<char>((b[8] & 0x3F) | 0x80);  // RFC 4122 variant
+  std::string id = "urn:uuid:";
+  char hex[3];
+  for (int i = 0; i < 16; ++i) {
+    if (i == 4 || i == 6 || i == 8 || i == 10) id += '-';
+    std::snprintf(hex, sizeof hex, "%02x", static_cast<unsigned char>(b[i]));
+    id += hex;
+  }
+  return id;
+}
+
+std::string passwordFromFileOrEnv(const std::string& file, const char* env_name) {
+  if (!file.empty()) {
+    std::ifstream in(file);
+    if (!in) throw ConfigError("ONVIF password file '" + file + "': cannot be read");
+    std::string line;
+    std::getline(in, line);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return line;
+  }
+  const char* env = std::getenv(env_name);
+  return env ? env : "";
 }
 
 std::string randomNonce() {

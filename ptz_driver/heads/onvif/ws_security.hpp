@@ -19,6 +19,12 @@ std::string passwordDigest(std::string_view nonce, std::string_view created,
                            std::string_view password);
 // 16 bytes from OpenSSL's random generator.
 std::string randomNonce();
+// urn:uuid:… with 16 random bytes (a version 4 UUID): a WS-Addressing MessageID or endpoint.
+std::string randomMessageId();
+
+// The first line of file (a trailing CR dropped); without a file, the environment variable
+// env_name, else "". Throws ConfigError when the file cannot be read. Passwords never in a flag.
+std::string passwordFromFileOrEnv(const std::string& file, const char* env_name);
 
 // xs:dateTime in UTC with milliseconds: 2026-12-05T18:33:02.125Z.
 std::string xsDateTime(double unix_s);

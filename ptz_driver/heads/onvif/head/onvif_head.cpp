@@ -235,16 +235,7 @@ void OnvifHead::work() {
 }
 
 std::string onvifHeadPassword(const std::string& file) {
-  if (!file.empty()) {
-    std::ifstream in(file);
-    if (!in) throw ConfigError("ONVIF password file '" + file + "': cannot be read");
-    std::string line;
-    std::getline(in, line);
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    return line;
-  }
-  const char* env = std::getenv("PTZ_ONVIF_PASSWORD");
-  return env ? env : "";
+  return onvif::passwordFromFileOrEnv(file, "PTZ_ONVIF_PASSWORD");
 }
 
 }  // namespace ptz::driver
