@@ -20,6 +20,7 @@
 #include "ptzstereo/stereo_frame_t.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
+#include "support/step_test.hpp"
 
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;
@@ -109,45 +110,14 @@ TEST(StabilitySweep, TheRealLoopTurnsUnstableWhereTheSampledAnalysisSays) {
   }
 }
 
-namespace {
-// Logs what it hears on PTZ_STATE and PTZ_SETPOINT to an LCM log, as lcm-logger would; answers
-// each frame with a step test: pan 0 for the first 15 frames, then 0.3 rad.
-struct StepTest {
-  lcm::LCM* lcm;
-  lcm::LogFile* log;
-  int64_t events = 0;
-  void record(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    lcm::LogEvent ev{};
-    ev.eventnum = events++;
-    ev.timestamp = rbuf->recv_utime;
-    ev.channel = channel;
-    ev.datalen = static_cast<int32_t>(rbuf->data_size);
-    ev.data = rbuf->data;
-    log->writeEvent(&ev);
-  }
-  void onFrame(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::stereo_frame_t* m) {
-    ptzstereo::ptz_setpoint_t sp{};
-    sp.utime = m->utime;
-    sp.frame_seq = m->seq;
-    sp.publish_utime = ptz::wallUtime();
-    const double pan = m->seq < 15 ? 0.0 : 0.3;
-    sp.left = {pan, 0.0, 1.0};
-    sp.right = {pan, 0.0, 1.0};
-    lcm->publish("PTZ_SETPOINT", &sp);
-  }
-};
-}  // namespace
-
 TEST(Identify, RecoversTheSimulatorsAxisFromALoggedStepTest) {
   const std::string path = std::string(::testing::TempDir()) + "/step_test.lcmlog";
   {
     lcm::LCM lcm(ptz::test::kTestUrl);
     lcm::LogFile log(path, "w");
     ASSERT_TRUE(log.good());
-    StepTest t{&lcm, &log};
-    lcm.subscribe("PTZ_STATE", &StepTest::record, &t);
-    lcm.subscribe("PTZ_SETPOINT", &StepTest::record, &t);
-    lcm.subscribe("STEREO_FRAME", &StepTest::onFrame, &t);
+    ptz::test::StepTest t{&lcm, &log};
+    t.subscribe();
     ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", ptz::test::kTestUrl, "--clock", "lockstep",
                       "--frames", "90", "--encoding", "jpeg", "--pan-gain", "0.9",
                       "--pan-time-constant-s", "0.3", "--dead-time-s", "0.15", "--pan-max-rate",
@@ -157,17 +127,10 @@ TEST(Identify, RecoversTheSimulatorsAxisFromALoggedStepTest) {
     ptz::test::drain(lcm, 300ms);
     ASSERT_GT(t.events, 300);
   }
-  const std::string out = std::string(::testing::TempDir()) + "/identify.txt";
-  ASSERT_EQ(std::system((std::string(PTZ_IDENTIFY_BIN) + " --log " + path + " > " + out).c_str()),
-            0);
-  std::ifstream in(out);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  double K = 0, T = 0, tau = 0;
-  const auto at = text.find("K = ");
-  ASSERT_NE(at, std::string::npos) << text;
-  ASSERT_EQ(std::sscanf(text.c_str() + at, "K = %lf T = %lf s tau = %lf", &K, &T, &tau), 3) << text;
-  std::printf("%s", text.c_str());
-  EXPECT_NEAR(K, 0.9, 0.03 * 0.9);
-  EXPECT_NEAR(T, 0.3, 0.03 * 0.3);
-  EXPECT_NEAR(tau, 0.15, 0.03 * 0.15);
+  const ptz::test::Identified fit = ptz::test::identify(PTZ_IDENTIFY_BIN, path);
+  ASSERT_TRUE(fit.ok) << fit.text;
+  std::printf("%s", fit.text.c_str());
+  EXPECT_NEAR(fit.K, 0.9, 0.03 * 0.9);
+  EXPECT_NEAR(fit.T_s, 0.3, 0.03 * 0.3);
+  EXPECT_NEAR(fit.tau_s, 0.15, 0.03 * 0.15);
 }

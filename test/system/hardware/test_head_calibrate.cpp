@@ -17,7 +17,9 @@
 #include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 #include "support/child_process.hpp"
 #include "support/lcm_wait.hpp"
+#include "support/step_test.hpp"
 
+using namespace std::chrono_literals;
 using ptz::test::ChildProcess;
 
 namespace {
@@ -102,6 +104,40 @@ TEST(HeadCalibrate, ARefusedPasswordOrNoFramesFailsWithTheReason) {
   EXPECT_NE(silent.find("no usable STEREO_FRAME for 2 s"), std::string::npos) << silent;
   std::remove((tmp + ".pw").c_str());
   std::remove((tmp + ".log").c_str());
+}
+
+// The rest of a head's model, its response: a step through ptz-driver's onvif backend logged as
+// a user logs it, fitted by ptz-identify (the camera: the paper's plant, K 1, T 0.24 s, dead time
+// 0.1 s; what the wire adds shows as dead time).
+TEST(HeadCalibrate, AnOnvifCamerasResponseIsIdentifiedFromALoggedStep) {
+  const std::string path = "/tmp/ptz_onvif_step_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string model = kConfig + "onvif/generic_ptz.yaml";
+  {
+    lcm::LCM lcm(kUrl);
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    ptz::test::StepTest t{&lcm, &log};
+    ChildProcess driver({PTZ_DRIVER_BIN, "--lcm-url", kUrl, "--backend", "onvif", "--onvif-model",
+                         model, "--onvif-left-url", "http://127.0.0.1:18120", "--onvif-right-url",
+                         "http://127.0.0.1:18121", "--onvif-status-rate-hz", "50",
+                         "--max-setpoint-rate", "100"});
+    ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", kUrl, "--config", kConfig + "sim_paper.yaml",
+                      "--clock", "realtime", "--encoding", "jpeg", "--onvif-port", "18120",
+                      "--onvif-model", model, "--duration-s", "4"});
+    t.subscribe();
+    ptz::test::handleUntil(
+        lcm, [&] { return sim.wait(0ms) >= 0; }, 60s);
+    ptz::test::drain(lcm, 300ms);
+    ASSERT_GT(t.events, 200);
+  }
+  const ptz::test::Identified fit = ptz::test::identify(PTZ_IDENTIFY_BIN, path);
+  std::remove(path.c_str());
+  ASSERT_TRUE(fit.ok) << fit.text;
+  std::printf("%s", fit.text.c_str());
+  EXPECT_NEAR(fit.K, 1.0, 0.03);
+  EXPECT_NEAR(fit.T_s, 0.24, 0.1 * 0.24);
+  EXPECT_GT(fit.tau_s, 0.1 - 0.01);  // never less than the camera's own
+  EXPECT_LT(fit.tau_s, 0.2);         // and the wire adds tens of ms at most
 }
 
 }  // namespace
