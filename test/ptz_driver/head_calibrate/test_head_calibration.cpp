@@ -17,6 +17,7 @@
 #include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 #include "ptz_driver/heads/visca/visca_model.hpp"
 #include "sim/renderer.hpp"
+#include "support/focal_length_error.hpp"
 
 namespace {
 
@@ -125,21 +126,6 @@ ptz::driver::UnitMap calibrate(Camera& c, const ptz::driver::UnitMapGuess& guess
   return calibration.result();
 }
 
-// The largest relative focal length error of the measured zoom map over [from, to] in steps,
-// each within 2 %.
-template <class Truth, class Measured>
-double worstFocalLengthError(const ptz::StereoRig& rig, double from, double to, double step,
-                             const Truth& truth, const Measured& measured) {
-  double worst = 0;
-  for (double u = from; u <= to + step / 2; u += step) {
-    const double f_true = rig.left.intrinsicsAt(truth(u)).fx;
-    const double f_measured = rig.left.intrinsicsAt(measured(u)).fx;
-    EXPECT_NEAR(f_measured / f_true, 1, 0.02) << "at zoom " << u;
-    worst = std::max(worst, std::abs(f_measured / f_true - 1));
-  }
-  return worst;
-}
-
 TEST(HeadCalibration, AnOnvifCamerasMapIsMeasuredFromAModelFileThatIsWrong) {
   Camera c;
   // The camera: pan 1 unit = 150 deg, tilt -1..1 over -40..80 deg, the cheap camera's zoom.
@@ -165,7 +151,7 @@ TEST(HeadCalibration, AnOnvifCamerasMapIsMeasuredFromAModelFileThatIsWrong) {
   EXPECT_NEAR(measured.tilt_max_rad - measured.tilt_min_rad, 120 * kDeg, 0.005 * 120 * kDeg);
   EXPECT_NEAR(measured.tiltRad(guess.home.tilt), 0, 1e-9);
   // The zoom: the focal length within 2 % over the range, at every 0.01.
-  const double worst = worstFocalLengthError(
+  const double worst = ptz::test::worstFocalLengthError(
       c.rig(), 0, 1, 0.01, [&](double u) { return truth.zoomRatio(u); },
       [&](double u) { return measured.zoomRatio(u); });
   std::printf("pan %+.4f %%, tilt %+.4f %%, focal length within %.3f %% (%zu zoom positions)\n",
@@ -191,7 +177,7 @@ TEST(HeadCalibration, AViscaCamerasMapIsMeasuredFromAnotherModelsFile) {
   const ptz::driver::ViscaModel measured = ptz::driver::ViscaModel::load(out);
   EXPECT_NEAR(measured.pan_units_per_rad / truth.pan_units_per_rad, 1, 0.005);
   EXPECT_NEAR(measured.tilt_units_per_rad / truth.tilt_units_per_rad, 1, 0.005);
-  const double worst = worstFocalLengthError(
+  const double worst = ptz::test::worstFocalLengthError(
       c.rig(), 0, 14000, 100, [&](double u) { return truth.zoomRatio(static_cast<int>(u)); },
       [&](double u) { return measured.zoomRatio(static_cast<int>(u)); });
   std::printf("pan %+.4f %%, tilt %+.4f %%, focal length within %.3f %% (%zu zoom positions)\n",

@@ -15,7 +15,9 @@
 
 #include "common/rig.hpp"
 #include "ptz_driver/heads/onvif/head/onvif_model.hpp"
+#include "ptz_driver/heads/visca/visca_model.hpp"
 #include "support/child_process.hpp"
+#include "support/focal_length_error.hpp"
 #include "support/lcm_wait.hpp"
 #include "support/step_test.hpp"
 
@@ -54,20 +56,49 @@ TEST(HeadCalibrate, TheCheapOnvifCamerasMapIsMeasuredThroughTheirOnvifServers) {
   const double tilt_scale = (truth.tilt_max_rad - truth.tilt_min_rad) / 2;
   EXPECT_NEAR((measured.pan_max_rad - measured.pan_min_rad) / 2 / pan_scale, 1, 0.005);
   EXPECT_NEAR((measured.tilt_max_rad - measured.tilt_min_rad) / 2 / tilt_scale, 1, 0.005);
-  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
-  double worst = 0;
-  for (int i = 0; i <= 100; ++i) {
-    const double u = i / 100.0;
-    const double f_true = rig.left.intrinsicsAt(truth.zoomRatio(u)).fx;
-    const double f_measured = rig.left.intrinsicsAt(measured.zoomRatio(u)).fx;
-    worst = std::max(worst, std::abs(f_measured / f_true - 1));
-    EXPECT_NEAR(f_measured / f_true, 1, 0.02) << "at zoom " << u;
-  }
+  const double worst = ptz::test::worstFocalLengthError(
+      ptz::StereoRig::makeDefault(), 0, 1, 0.01, [&](double u) { return truth.zoomRatio(u); },
+      [&](double u) { return measured.zoomRatio(u); });
   std::printf("pan %.4f %%, tilt %.4f %%, focal length worst %.3f %%\n",
               100 * ((measured.pan_max_rad - measured.pan_min_rad) / 2 / pan_scale - 1),
               100 * ((measured.tilt_max_rad - measured.tilt_min_rad) / 2 / tilt_scale - 1),
               100 * worst);
   ::unlink(out.c_str());
+}
+
+// A VISCA camera (ptz-sim as a Sony SRG-300 over VISCA-over-IP) whose model file is unknown: the
+// calibration starts from a file of the same family with a third fewer units per degree and a
+// linear zoom, and writes the SRG-300's map.
+TEST(HeadCalibrate, AViscaCamerasMapIsMeasuredThroughItsViscaServer) {
+  const std::string tmp = "/tmp/ptz_head_calibrate_visca_" + std::to_string(::getpid());
+  const std::string srg300 = kConfig + "visca/sony_srg300.yaml";
+  std::ofstream(tmp + "_guess.yaml")
+      << "%YAML:1.0\n---\nname: \"an unknown VISCA camera\"\npan_nibbles: 5\n"
+         "pan_units_per_deg: 34.0\ntilt_units_per_deg: 34.0\npan_min_deg: -170.0\n"
+         "pan_max_deg: 170.0\ntilt_min_deg: -20.0\ntilt_max_deg: 90.0\npan_speed_max: 24\n"
+         "tilt_speed_max: 23\nzoom_positions: [0, 16384]\nzoom_ratios: [1, 16]\n";
+  ChildProcess sim({PTZ_SIM_BIN, "--lcm-url", kUrl, "--config", kConfig + "sim_paper.yaml",
+                    "--clock", "realtime", "--visca-port", "52395", "--visca-model", srg300,
+                    "--duration-s", "400"});
+  ChildProcess calibrate(
+      {PTZ_HEAD_CALIBRATE_BIN, "--lcm-url", kUrl, "--backend", "visca_ip", "--visca-model",
+       tmp + "_guess.yaml", "--left-port", "52395", "--right-port", "52396", "--zoom-max-units",
+       "14000", "--output", tmp + ".yaml"},
+      tmp + ".log");
+  ASSERT_EQ(calibrate.wait(std::chrono::seconds(280)), 0) << "ptz-head-calibrate said:\n"
+                                                          << readFile(tmp + ".log");
+  const ptz::driver::ViscaModel truth = ptz::driver::ViscaModel::load(srg300);
+  const ptz::driver::ViscaModel measured = ptz::driver::ViscaModel::load(tmp + ".yaml");
+  EXPECT_NEAR(measured.pan_units_per_rad / truth.pan_units_per_rad, 1, 0.005);
+  EXPECT_NEAR(measured.tilt_units_per_rad / truth.tilt_units_per_rad, 1, 0.005);
+  const double worst = ptz::test::worstFocalLengthError(
+      ptz::StereoRig::makeDefault(), 0, 14000, 100,
+      [&](double u) { return truth.zoomRatio(static_cast<int>(u)); },
+      [&](double u) { return measured.zoomRatio(static_cast<int>(u)); });
+  std::printf("VISCA: pan %+.4f %%, tilt %+.4f %%, focal length worst %.3f %%\n",
+              100 * (measured.pan_units_per_rad / truth.pan_units_per_rad - 1),
+              100 * (measured.tilt_units_per_rad / truth.tilt_units_per_rad - 1), 100 * worst);
+  for (const char* end : {"_guess.yaml", ".yaml", ".log"}) std::remove((tmp + end).c_str());
 }
 
 // A camera that refuses the password, and a rig whose frames never come: each fails within its
