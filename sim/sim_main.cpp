@@ -64,12 +64,25 @@ class SimNode {
       onvif_ = std::make_unique<OnvifCameras>(
           driver::OnvifModel::load(onvif_model), cameras, options,
           [this](const OnvifCameras::Step& step) {
-            run_.withMotorsNow([&step](Simulator& sim, double t_s) {
+            run_.withMotorsNow([this, &step](Simulator& sim, double t_s) {
               const auto sp = step({sim.plant().pose(Side::kLeft), sim.plant().pose(Side::kRight)});
               int clamped = 0, rejected = 0;
-              if (sp) sim.command(t_s, (*sp)[0], (*sp)[1], &clamped, &rejected);
+              if (!sp) return;
+              sim.command(t_s, (*sp)[0], (*sp)[1], &clamped, &rejected);
+              run_.noteServedCommand();
             });
           });
+    }
+    if (visca_ || onvif_) {
+      if (run_.lockstep()) {  // the controller's answer seen, not applied: the cameras' commands
+                              // are
+        setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
+            *lcm_, ch_setpoint_, status_,
+            [this](const std::string& ch, const ptzstereo::ptz_setpoint_t& m) {
+              status_.countIn(ch, -1);
+              run_.noteControllerAnswer(m.frame_seq);
+            });
+      }
     } else {
       setpoints_ = std::make_unique<SafeSubscription<ptzstereo::ptz_setpoint_t>>(
           *lcm_, ch_setpoint_, status_,

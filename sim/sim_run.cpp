@@ -28,14 +28,18 @@ void declareSimSceneParams(Params& p) {
   p.add("state_rate_hz", 100.0, "Hz", "PTZ_STATE rate (sim time)", Range::between(1, 10000));
   p.add("lockstep_timeout_ms", 1000.0, "ms", "lockstep: advance anyway after this wall time",
         Range::above(0));
+  p.add("lockstep_served_wait_ms", 60.0, "ms",
+        "lockstep with VISCA or ONVIF cameras: after the controller's setpoint, wait this long "
+        "for ptz-driver's command (an unchanged one is not sent again)",
+        Range::between(1, 10000));
   addFreshnessParams(p, "setpoint", 500.0, "realtime: a PTZ_SETPOINT answering a frame");
   p.add("visca_port", 0, "",
-        "realtime: serve the heads as VISCA-over-IP cameras on 127.0.0.1 at this UDP port "
+        "serve the heads as VISCA-over-IP cameras on 127.0.0.1 at this UDP port "
         "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)",
         Range::between(0, 65534));
   p.add("visca_model", "", "VISCA camera model file the heads pretend to be (visca_port)");
   p.add("onvif_port", 0, "",
-        "realtime: serve the heads as ONVIF cameras (HTTP/SOAP) on 127.0.0.1 at this TCP port "
+        "serve the heads as ONVIF cameras (HTTP/SOAP) on 127.0.0.1 at this TCP port "
         "(left) and the next (right) instead of PTZ_SETPOINT and PTZ_STATE (0: off)",
         Range::between(0, 65534));
   p.add("onvif_model", "", "ONVIF camera model file the heads pretend to be (onvif_port)");
@@ -79,9 +83,6 @@ std::unique_ptr<Simulator> simulatorFromParams(const Params& p) {
 std::string viscaModelPath(const Params& p) {
   if (p.getInt("visca_port") <= 0) return "";
   // Real cameras do not speak LCM: ptz-driver commands them and publishes PTZ_STATE.
-  if (p.getString("clock") == "lockstep") {
-    throw ConfigError("parameter 'visca_port' needs clock realtime");
-  }
   if (p.getString("visca_model").empty()) {
     throw ConfigError("parameter 'visca_port' needs 'visca_model' (a VISCA model file)");
   }
@@ -90,9 +91,6 @@ std::string viscaModelPath(const Params& p) {
 
 std::string onvifModelPath(const Params& p) {
   if (p.getInt("onvif_port") <= 0) return "";
-  if (p.getString("clock") == "lockstep") {
-    throw ConfigError("parameter 'onvif_port' needs clock realtime");
-  }
   if (p.getInt("visca_port") > 0) {
     throw ConfigError("parameters 'onvif_port' and 'visca_port' exclude each other (one plant)");
   }
@@ -112,6 +110,8 @@ SimClock SimClock::fromParams(const Params& p) {
   c.frame_period_s = 1.0 / p.getDouble("frame_rate_hz");
   c.state_period_s = 1.0 / p.getDouble("state_rate_hz");
   c.lockstep_timeout_ms = p.getDouble("lockstep_timeout_ms");
+  c.served_heads = p.getInt("visca_port") > 0 || p.getInt("onvif_port") > 0;
+  c.lockstep_served_wait_ms = p.getDouble("lockstep_served_wait_ms");
   return c;
 }
 
@@ -168,7 +168,14 @@ Answer SimRun::awaitAnswer(int64_t seq, const Serve& serve) {
       std::chrono::steady_clock::now() +
       std::chrono::microseconds(static_cast<int64_t>(clock_.lockstep_timeout_ms * 1000));
   Answer answer = Answer::kAnswered;
-  while (!answered_) {
+  const auto served_wait =
+      std::chrono::microseconds(static_cast<int64_t>(clock_.lockstep_served_wait_ms * 1000));
+  const auto done = [&] {
+    if (!clock_.served_heads) return answered_;
+    return answered_ && (served_commands_ > commands_at_answer_ ||
+                         std::chrono::steady_clock::now() >= answered_at_ + served_wait);
+  };
+  while (!done()) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
                           deadline - std::chrono::steady_clock::now())
                           .count();
@@ -176,7 +183,9 @@ Answer SimRun::awaitAnswer(int64_t seq, const Serve& serve) {
       answer = Answer::kTimedOut;
       break;
     }
-    if (!serve(static_cast<int>(std::min<int64_t>(left, 100)))) {
+    // Served heads: the cameras' commands come on other threads, so LCM is polled in short slices.
+    const int64_t slice_ms = clock_.served_heads ? 2 : 100;
+    if (!serve(static_cast<int>(std::min<int64_t>(left, slice_ms)))) {
       answer = Answer::kStopped;
       break;
     }
@@ -224,9 +233,16 @@ SetpointOutcome SimRun::applySetpoint(const ptzstereo::ptz_setpoint_t& m) {
   return out;
 }
 
+void SimRun::noteControllerAnswer(int64_t frame_seq) {
+  if (frame_seq != awaiting_seq_ || answered_) return;
+  answered_ = true;
+  commands_at_answer_ = served_commands_;
+  answered_at_ = std::chrono::steady_clock::now();
+}
+
 void SimRun::withMotorsNow(const std::function<void(Simulator& sim, double t_s)>& f) {
   const std::lock_guard<std::mutex> lock(motors_);
-  const double t_s = std::max(sim_->time(), realtimeNow());
+  const double t_s = clock_.lockstep ? sim_->time() : std::max(sim_->time(), realtimeNow());
   sim_->advanceTo(t_s);
   f(*sim_, t_s);
 }

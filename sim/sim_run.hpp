@@ -2,9 +2,13 @@
 // the setpoints and the frames' truth. Realtime: frames every period of wall time, setpoints act
 // when they arrive (plus tau). Lockstep: sim time advances by one frame once the answer to the
 // frame (a setpoint naming it) came, or after lockstep_timeout_ms; the answer acts from the
-// frame's capture time. The main serves LCM and publishes through the callbacks.
+// frame's capture time. With served heads (VISCA or ONVIF cameras, ptz-driver between the
+// controller and the motors) the answer is the controller's setpoint for the frame, seen, then
+// the first camera command after it (or, an unchanged command not being sent again, none within
+// lockstep_served_wait_ms). The main serves LCM and publishes through the callbacks.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -42,6 +46,8 @@ struct SimClock {
   double frame_period_s = 1.0 / 30;
   double state_period_s = 0.01;
   double lockstep_timeout_ms = 1000;
+  bool served_heads = false;  // VISCA or ONVIF cameras: ptz-driver commands the motors
+  double lockstep_served_wait_ms = 60;
   // Throws ConfigError for a clock other than realtime or lockstep.
   static SimClock fromParams(const Params& p);
 };
@@ -90,8 +96,13 @@ class SimRun {
 
   // A PTZ_SETPOINT (realtime: found fresh by the caller).
   SetpointOutcome applySetpoint(const ptzstereo::ptz_setpoint_t& m);
-  // f with the motors advanced to now, under their lock (the VISCA cameras' thread).
+  // f with the motors advanced to now (lockstep: the frozen sim time), under their lock (the
+  // served cameras' threads).
   void withMotorsNow(const std::function<void(Simulator& sim, double t_s)>& f);
+  // Lockstep with served heads: the controller's PTZ_SETPOINT answering frame_seq was seen (it is
+  // not applied: the cameras' commands are), and a served camera applied a command.
+  void noteControllerAnswer(int64_t frame_seq);
+  void noteServedCommand() { ++served_commands_; }
 
  private:
   std::unique_ptr<Simulator> sim_;
@@ -103,8 +114,13 @@ class SimRun {
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;
   double current_frame_t_ = 0;
-  int64_t awaiting_seq_ = -1;
+  std::atomic<int64_t> awaiting_seq_{-1};
   bool answered_ = false;
+  // Served heads: the commands applied so far (the cameras' threads count them), and how many
+  // there were when the controller's answer was seen, and when.
+  std::atomic<int64_t> served_commands_{0};
+  int64_t commands_at_answer_ = 0;
+  std::chrono::steady_clock::time_point answered_at_;
   int64_t last_setpoint_utime_ = 0;
 };
 

@@ -67,6 +67,7 @@ void ViscaCameras::serve() {
         int clamped = 0, rejected = 0;
         sim.command(t_s, setpoints_[0], setpoints_[1], &clamped, &rejected);
         ++setpoints_applied_;
+        run_->noteServedCommand();
       }
     });
     packets_ = server_.packets();

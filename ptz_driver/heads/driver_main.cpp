@@ -24,15 +24,24 @@
 namespace ptz::driver {
 namespace {
 
+CaptureClock setpointClock(const Params& p) {
+  const std::string clock = p.getString("setpoint_capture_clock");
+  if (clock != "wall" && clock != "auto") {
+    throw p.invalid("setpoint_capture_clock", "must be wall or auto");
+  }
+  return clock == "wall" ? CaptureClock::kWall : CaptureClock::kAuto;
+}
+
 class DriverNode {
  public:
   DriverNode(const Params& p, lcm::LCM* lcm)
       : lcm_(lcm),
         status_(lcm, p, "ptz-driver"),
         period_s_(1.0 / p.getDouble("state_rate_hz")),
-        // Heads run on the wall clock: a setpoint's capture time is judged on it too.
+        // Heads run on the wall clock: a setpoint's capture time is judged on it too (but for a
+        // lockstep simulator's, setpoint_capture_clock auto).
         setpoint_gate_(status_, freshnessFrom(p, "setpoint"), "setpoint", "setpoint_",
-                       CaptureClock::kWall),
+                       setpointClock(p)),
         ch_setpoint_(channel(p, channels::kPtzSetpoint)),
         ch_state_(channel(p, channels::kPtzState)),
         driver_(makeHeads(p, openHeadLinesOrEmulated), HeadsDriver::Settings::fromParams(p)) {

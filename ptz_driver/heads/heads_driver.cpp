@@ -31,6 +31,10 @@ void declareDriverParams(Params& p) {
         Range::between(1, 1000));
   p.add("inquiry_timeout_s", 0.1, "s", "ask again when an inquiry is not answered in this time",
         Range::above(0));
+  p.add("setpoint_capture_clock", "wall",
+        "wall: a setpoint's frame capture time is judged on the wall clock (real cameras); auto: "
+        "capture times on another clock (a lockstep ptz-sim's) are judged by the publish time "
+        "alone");
   p.add("deadman_s", 0.25, "s", "without a fresh setpoint for this long the heads hold",
         Range::above(0));
   addFreshnessParams(p, "setpoint", 500.0, "a PTZ_SETPOINT (by the capture time of its frame)");

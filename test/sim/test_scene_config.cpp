@@ -163,8 +163,6 @@ TEST(SimSettings, OnvifSettingsAreCheckedAndThePasswordNeverShown) {
       {{"--onvif-port", "18000", "--onvif-model", generic, "--visca-port", "18002", "--visca-model",
         PTZ_SOURCE_DIR "/config/visca/sony_srg300.yaml"},
        "parameters 'onvif_port' and 'visca_port' exclude each other (one plant)"},
-      {{"--onvif-port", "18000", "--onvif-model", generic, "--clock", "lockstep"},
-       "parameter 'onvif_port' needs clock realtime"},
       {{"--onvif-port", "18000", "--onvif-model", bad_model},
        "ONVIF model file '" + bad_model + "', zoom_normalised: must run from 0 to 1"},
       {{"--onvif-port", "18000", "--onvif-model", generic, "--onvif-password-file",

@@ -89,6 +89,20 @@ void print(const char* name, LoopResult& r) {
       static_cast<long long>(r.driver["head_errors"]));
 }
 
+// Both runs ended well; ONVIF within the VISCA test's own bounds, and within 1.5x of VISCA on the
+// same scenario, this run.
+void expectWithin1point5xOfVisca(const LoopResult& onvif, const LoopResult& visca) {
+  EXPECT_EQ(visca.sim_exit, 0);
+  EXPECT_EQ(onvif.sim_exit, 0);
+  const auto& v = visca.summary;
+  const auto& o = onvif.summary;
+  EXPECT_LE(o.centering_rms_px, 10.0);
+  EXPECT_EQ(o.frames_target_outside_image, 0);
+  EXPECT_LE(o.position_error_rms_pct_of_range, 0.5);
+  EXPECT_LE(o.centering_rms_px, 1.5 * v.centering_rms_px);
+  EXPECT_LE(o.position_error_rms_pct_of_range, 1.5 * v.position_error_rms_pct_of_range);
+}
+
 }  // namespace
 
 TEST(OnvifLoop, TracksTheFigureEightThroughOnvifWithin1point5xOfVisca) {
@@ -116,17 +130,7 @@ TEST(OnvifLoop, TracksTheFigureEightThroughOnvifWithin1point5xOfVisca) {
   EXPECT_EQ(logged.find("loop-pw"), std::string::npos) << "the password is never printed";
   print("VISCA", visca);
   print("ONVIF", onvif);
-  EXPECT_EQ(visca.sim_exit, 0);
-  EXPECT_EQ(onvif.sim_exit, 0);
-  const auto& v = visca.summary;
-  const auto& o = onvif.summary;
-  // The VISCA test's own bounds...
-  EXPECT_LE(o.centering_rms_px, 10.0);
-  EXPECT_EQ(o.frames_target_outside_image, 0);
-  EXPECT_LE(o.position_error_rms_pct_of_range, 0.5);
-  // ...and within 1.5x of VISCA on the same scenario, this run.
-  EXPECT_LE(o.centering_rms_px, 1.5 * v.centering_rms_px);
-  EXPECT_LE(o.position_error_rms_pct_of_range, 1.5 * v.position_error_rms_pct_of_range);
+  expectWithin1point5xOfVisca(onvif, visca);
   EXPECT_GT(onvif.driver["head_round_trip_us_p50"], 0);
   EXPECT_GT(onvif.states, 15 * 10);  // the driver's PTZ_STATE, measured through GetStatus
   EXPECT_EQ(onvif.driver["head_errors"], 0);
@@ -151,4 +155,35 @@ TEST(OnvifLoop, TracksTheFigureEightWithContinuousMoves) {
   EXPECT_EQ(r.summary.frames_target_outside_image, 0);
   EXPECT_LE(r.summary.position_error_rms_pct_of_range, 0.5);
   EXPECT_EQ(r.driver["head_errors"], 0);
+}
+
+// The same comparison in lockstep: ptz-sim waits for each frame's answer, ptz-control's setpoint
+// and then ptz-driver's command to the cameras (over VISCA's UDP or ONVIF's HTTP), so the run's
+// numbers do not depend on how busy the machine is.
+TEST(OnvifLoop, InLockstepTracksTheFigureEightThroughOnvifWithin1point5xOfVisca) {
+  const std::vector<std::string> lockstep = {"--clock", "lockstep", "--lockstep-timeout-ms",
+                                             "3000"};
+  const auto with = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  const std::string visca_model = kConfig + "visca/sony_srg300.yaml";
+  LoopResult visca =
+      runLoop({"--visca-model", visca_model, "--left-port", "52393", "--right-port", "52394",
+               "--setpoint-capture-clock", "auto"},
+              with({"--visca-port", "52393", "--visca-model", visca_model}, lockstep));
+  const std::string onvif_model = kConfig + "onvif/generic_ptz.yaml";
+  LoopResult onvif =
+      runLoop({"--backend", "onvif", "--onvif-model", onvif_model, "--onvif-left-url",
+               "http://127.0.0.1:18095", "--onvif-right-url", "http://127.0.0.1:18096",
+               "--onvif-status-rate-hz", "50", "--setpoint-capture-clock", "auto"},
+              with({"--onvif-port", "18095", "--onvif-model", onvif_model}, lockstep));
+  print("VISCA lockstep", visca);
+  print("ONVIF lockstep", onvif);
+  expectWithin1point5xOfVisca(onvif, visca);
+  // Every frame answered through the cameras: no lockstep timeout, no setpoint dropped as stale.
+  EXPECT_EQ(onvif.sim["lockstep_timeouts"], 0);
+  EXPECT_EQ(visca.sim["lockstep_timeouts"], 0);
+  EXPECT_EQ(onvif.driver["PTZ_SETPOINT.dropped_setpoint_stale"], 0);
+  EXPECT_GT(onvif.sim["onvif_setpoints_applied"], 100);
 }
