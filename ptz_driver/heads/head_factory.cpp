@@ -68,9 +68,10 @@ void declareBackendParams(Params& p) {
         Range::between(10, 60000));
   p.add("onvif_status_rate_hz", 25.0, "Hz", "backend onvif: GetStatus at most this often",
         Range::between(0.5, 200));
-  p.add("onvif_move_mode", "absolute",
-        "backend onvif: absolute (AbsoluteMove) or continuous (ContinuousMove's velocity "
-        "toward the setpoint, for cameras whose absolute moves are slow)");
+  p.add("onvif_move_mode", "auto",
+        "backend onvif: auto (AbsoluteMove where the camera has it, else ContinuousMove), "
+        "absolute, or continuous (ContinuousMove's velocity toward the setpoint, for cameras "
+        "whose absolute moves are slow)");
   p.add("onvif_continuous_gain", 2.0, "1/s",
         "backend onvif, move mode continuous: velocity = gain x the error", Range::above(0));
   declareGpioParams(p);  // backend gpio: DC motors, encoders and limit switches on GPIO lines
@@ -141,10 +142,12 @@ std::array<std::unique_ptr<PtzHead>, 2> makeOnvifHeads(const Params& p, bool uni
   s.status_rate_hz = p.getDouble("onvif_status_rate_hz");
   s.continuous_gain_per_s = p.getDouble("onvif_continuous_gain");
   const std::string mode = p.getString("onvif_move_mode");
-  if (mode != "absolute" && mode != "continuous") {
-    throw p.invalid("onvif_move_mode", "must be absolute or continuous");
+  if (mode != "auto" && mode != "absolute" && mode != "continuous") {
+    throw p.invalid("onvif_move_mode", "must be auto, absolute or continuous");
   }
-  s.move_mode = mode == "continuous" ? OnvifMoveMode::kContinuous : OnvifMoveMode::kAbsolute;
+  s.move_mode = mode == "continuous" ? OnvifMoveMode::kContinuous
+                : mode == "absolute" ? OnvifMoveMode::kAbsolute
+                                     : OnvifMoveMode::kAuto;
   std::array<std::unique_ptr<PtzHead>, 2> heads;
   const char* const urls[2] = {"onvif_left_url", "onvif_right_url"};
   for (size_t i = 0; i < 2; ++i) {

@@ -118,11 +118,13 @@ std::string space1(const char* element, const std::string& uri, double lo, doubl
          "</tt:" + element + ">";
 }
 
-std::string ptzSpaces() {
+// absolute: the camera takes AbsoluteMove (most do; some offer ContinuousMove alone).
+std::string ptzSpaces(bool absolute) {
   const std::string pt = std::string(kSpaces) + "PanTiltSpaces/";
   const std::string z = std::string(kSpaces) + "ZoomSpaces/";
-  return space2("AbsolutePanTiltPositionSpace", pt + "PositionGenericSpace", -1, 1) +
-         space1("AbsoluteZoomPositionSpace", z + "PositionGenericSpace", 0, 1) +
+  return (absolute ? space2("AbsolutePanTiltPositionSpace", pt + "PositionGenericSpace", -1, 1) +
+                         space1("AbsoluteZoomPositionSpace", z + "PositionGenericSpace", 0, 1)
+                   : std::string()) +
          space2("RelativePanTiltTranslationSpace", pt + "TranslationGenericSpace", -1, 1) +
          space1("RelativeZoomTranslationSpace", z + "TranslationGenericSpace", -1, 1) +
          space2("ContinuousPanTiltVelocitySpace", pt + "VelocityGenericSpace", -1, 1) +
@@ -411,7 +413,7 @@ std::string OnvifCameraEmulator::dispatch(const onvif::XmlNode& op, const std::s
     const std::string node = std::string("token=\"") + kNode +
                              "\" FixedHomePosition=\"false\"><tt:Name>PTZ</tt:Name>"
                              "<tt:SupportedPTZSpaces>" +
-                             ptzSpaces() +
+                             ptzSpaces(model_.absolute_moves) +
                              "</tt:SupportedPTZSpaces><tt:MaximumNumberOfPresets>100</"
                              "tt:MaximumNumberOfPresets><tt:HomeSupported>false</tt:HomeSupported>";
     if (name == "GetNodes") {
@@ -438,7 +440,7 @@ std::string OnvifCameraEmulator::dispatch(const onvif::XmlNode& op, const std::s
       const std::string token = op.child("ConfigurationToken").text();
       if (token != kPtzConfig) throw invalidArg("ter:NoConfig", "no configuration '" + token + "'");
       return "<tptz:GetConfigurationOptionsResponse><tptz:PTZConfigurationOptions><tt:Spaces>" +
-             ptzSpaces() +
+             ptzSpaces(model_.absolute_moves) +
              "</tt:Spaces><tt:PTZTimeout><tt:Min>PT1S</tt:Min><tt:Max>PT60S</tt:Max>"
              "</tt:PTZTimeout></tptz:PTZConfigurationOptions>"
              "</tptz:GetConfigurationOptionsResponse>";
@@ -461,6 +463,9 @@ std::string OnvifCameraEmulator::dispatch(const onvif::XmlNode& op, const std::s
     }
     if (name == "AbsoluteMove") {
       profile();
+      if (!model_.absolute_moves) {
+        throw invalidArg("ter:ActionNotSupported", "this camera has no AbsoluteMove");
+      }
       const Vec3 to = fill(*vec("Position", true), at);
       if (std::abs(to[0]) > 1 || std::abs(to[1]) > 1 || to[2] < 0 || to[2] > 1) {
         throw invalidArg("ter:InvalidPosition", "Position outside the generic space");

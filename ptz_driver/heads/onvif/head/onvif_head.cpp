@@ -157,8 +157,8 @@ std::string OnvifHead::problem(double now_s) const {
 
 void OnvifHead::work() {
   OnvifSession session(model_, settings_, now_s_);
-  const bool continuous = settings_.move_mode == OnvifMoveMode::kContinuous;
-  bool up = false;  // the start-up done and nothing failed since
+  bool continuous = false;  // as the camera's start-up decided (move_mode, its spaces)
+  bool up = false;          // the start-up done and nothing failed since
   // The last AbsoluteMove the camera took: the driver commands every tick, the camera hears
   // only what changed (again after a stop or a failure).
   PtzPose last_move;
@@ -198,6 +198,7 @@ void OnvifHead::work() {
     }
     if (!up) {
       up = run([&] { return session.start(); }, true);
+      continuous = session.continuousMoves();
       if (!up) {
         wake_.wait_for(lk, std::chrono::duration<double>(retry_s),
                        [&] { return quit_ || stops_asked_ != stops_done_; });

@@ -25,7 +25,7 @@ OnvifModel OnvifModel::load(const std::string& path) {
   checkFields(root,
               {"name", "manufacturer", "model", "pan_min_deg", "pan_max_deg", "tilt_min_deg",
                "tilt_max_deg", "pan_tilt_speed_max_deg_s", "zoom_normalised", "zoom_ratios",
-               "cheap", "status_delay_ms"},
+               "cheap", "status_delay_ms", "absolute_moves"},
               where);
   OnvifModel m;
   m.name = readString(root, "name", where);
@@ -50,6 +50,7 @@ OnvifModel OnvifModel::load(const std::string& path) {
   }
   m.cheap = readDouble(root, "cheap", where, 0.0, Range::between(0, 1)) != 0;
   m.status_delay_ms = readDouble(root, "status_delay_ms", where, 0.0, Range::between(0, 10000));
+  m.absolute_moves = readDouble(root, "absolute_moves", where, 1.0, Range::between(0, 1)) != 0;
   return m;
 }
 

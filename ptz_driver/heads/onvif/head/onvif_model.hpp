@@ -19,6 +19,8 @@ struct OnvifModel {
   // A cheap camera: GetStatus answers after status_delay_ms, AbsoluteMove ignores its Speed.
   bool cheap = false;
   double status_delay_ms = 0;
+  // False: a camera without AbsoluteMove (no absolute spaces; ContinuousMove only).
+  bool absolute_moves = true;
 
   // Throws ConfigError naming the file and the field.
   static OnvifModel load(const std::string& path);

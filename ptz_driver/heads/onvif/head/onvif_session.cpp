@@ -78,6 +78,13 @@ OnvifOutcome OnvifSession::check(const std::string& op, const onvif::Result<T>& 
 }
 
 OnvifOutcome OnvifSession::checkSpaces(const onvif::PtzSpaces& s) const {
+  if (continuous_) {
+    if (!s.continuous_pan_tilt_velocity) {
+      return {OnvifFailure::kMalformed, "GetNodes: no continuous pan/tilt velocity space"};
+    }
+    // Positions (GetStatus) are then in the generic spaces by default; none to check them by.
+    if (!s.absolute_pan_tilt) return {};
+  }
   // The model's angle map is in the generic spaces: pan, tilt -1..1, zoom 0..1.
   if (!s.absolute_pan_tilt || !near(s.absolute_pan_tilt->x, -1, 1) ||
       !near(s.absolute_pan_tilt->y, -1, 1)) {
@@ -87,9 +94,6 @@ OnvifOutcome OnvifSession::checkSpaces(const onvif::PtzSpaces& s) const {
   if (!s.absolute_zoom || !near(s.absolute_zoom->x, 0, 1)) {
     return {OnvifFailure::kMalformed,
             "GetNodes: no absolute zoom space of 0..1 (the model's generic space)"};
-  }
-  if (settings_.move_mode == OnvifMoveMode::kContinuous && !s.continuous_pan_tilt_velocity) {
-    return {OnvifFailure::kMalformed, "GetNodes: no continuous pan/tilt velocity space"};
   }
   return {};
 }
@@ -150,6 +154,8 @@ OnvifOutcome OnvifSession::start() {
   }
   if (!node && !nodes->empty()) node = &nodes->front();
   if (!node) return {OnvifFailure::kMalformed, "GetNodes: no PTZ node"};
+  continuous_ = settings_.move_mode == OnvifMoveMode::kContinuous ||
+                (settings_.move_mode == OnvifMoveMode::kAuto && !node->spaces.absolute_pan_tilt);
   if (o = checkSpaces(node->spaces); !o.ok()) return o;
 
   if (o = post(ptz_url_, onvif::getConfigurationOptions(chosen->ptz_configuration_token), &body);

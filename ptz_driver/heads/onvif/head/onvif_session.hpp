@@ -17,7 +17,8 @@
 
 namespace ptz::driver {
 
-enum class OnvifMoveMode { kAbsolute, kContinuous };
+// kAuto: AbsoluteMove where the camera has it, else ContinuousMove.
+enum class OnvifMoveMode { kAuto, kAbsolute, kContinuous };
 
 struct OnvifHeadSettings {
   std::string url =
@@ -27,7 +28,7 @@ struct OnvifHeadSettings {
   std::string profile;   // a media profile's token or name; empty: the first with PTZ
   double timeout_ms = 1000;
   double status_rate_hz = 25;  // GetStatus at most this often
-  OnvifMoveMode move_mode = OnvifMoveMode::kAbsolute;
+  OnvifMoveMode move_mode = OnvifMoveMode::kAuto;
   double continuous_gain_per_s = 4;  // continuous mode: velocity = gain x error
 };
 
@@ -55,6 +56,9 @@ class OnvifSession {
   // GetSystemDateAndTime, GetCapabilities, GetProfiles, GetNodes, GetConfigurationOptions.
   OnvifOutcome start();
   bool started() const { return started_; }
+  // After start(): whether moves are ContinuousMove's velocities (the mode, or kAuto on a camera
+  // without absolute spaces).
+  bool continuousMoves() const { return continuous_; }
   // AbsoluteMove to pose through the model's angle map.
   OnvifOutcome absoluteMove(const PtzPose& pose);
   // ContinuousMove toward target from measured: the target's own pan/tilt rate (rad/s, fed
@@ -85,6 +89,7 @@ class OnvifSession {
   onvif::HttpOptions http_options_;
   bool started_ = false;
   std::string ptz_url_, profile_;
+  bool continuous_ = false;
   double offset_s_ = 0;
   // The offset from GetStatus's UtcTime (ms) of the fastest exchange lately: better than
   // GetSystemDateAndTime's whole seconds.

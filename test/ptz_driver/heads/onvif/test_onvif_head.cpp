@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <fstream>
 #include <functional>
 #include <mutex>
 
@@ -37,8 +38,8 @@ double nowS() {
 // what was commanded); pause() holds the server's loop, so the cameras stop answering.
 class Cameras {
  public:
-  explicit Cameras(const std::string& password, double clock_offset_s = 0,
-                   bool http_digest = false) {
+  explicit Cameras(const std::string& password, double clock_offset_s = 0, bool http_digest = false,
+                   const std::string& model = kGeneric) {
     std::array<ptz::driver::OnvifCameraSettings, 2> settings;
     for (auto& s : settings) {
       s.password = password;
@@ -47,7 +48,7 @@ class Cameras {
     ptz::sim::OnvifServerOptions options;
     options.http_digest = http_digest;
     cameras_ =
-        std::make_unique<ptz::sim::OnvifCameras>(OnvifModel::load(kGeneric), settings, options,
+        std::make_unique<ptz::sim::OnvifCameras>(OnvifModel::load(model), settings, options,
                                                  [this](const ptz::sim::OnvifCameras::Step& step) {
                                                    std::unique_lock<std::mutex> lk(lock_);
                                                    resumed_.wait(lk, [this] { return !paused_; });
@@ -262,6 +263,30 @@ TEST(OnvifHead, ContinuousModeSteersTheVelocityToTheSetpoint) {
   EXPECT_TRUE(near(cams.left(), stopped, 1e-3));
 }
 
+// A camera that offers ContinuousMove alone (no absolute spaces; AbsoluteMove a fault): the
+// default mode, auto, steers it by velocity, where absolute moves would have failed.
+TEST(OnvifHead, AutoModeSteersACameraWithoutAbsoluteMoveByVelocity) {
+  const std::string model = ::testing::TempDir() + "continuous_only_ptz.yaml";
+  {
+    std::ifstream in(kGeneric);
+    std::ofstream out(model);
+    out << in.rdbuf() << "absolute_moves: 0\n";
+  }
+  Cameras cams("", 0, false, model);
+  OnvifHeadSettings s = settings(cams, "");
+  ASSERT_EQ(s.move_mode, OnvifMoveMode::kAuto);
+  OnvifHead head(OnvifModel::load(kGeneric), s);
+  head.start(nowS());
+  const PtzPose target{-0.4, 0.2, 1.5};
+  head.command(target, nowS());
+  ASSERT_TRUE(runUntil(head, [&] {
+    return head.measured() && near(*head.measured(), target, 0.01);
+  })) << head.problem(nowS());
+  EXPECT_TRUE(head.ready());
+  EXPECT_EQ(head.stats().errors, 0);
+  EXPECT_TRUE(head.stop(nowS(), 5.0));
+}
+
 TEST(OnvifHead, TheBackendsParametersAreCheckedByName) {
   ptz::Params p("test", "");
   ptz::addAxisLimitParams(p);
@@ -271,7 +296,7 @@ TEST(OnvifHead, TheBackendsParametersAreCheckedByName) {
   p.set("onvif_move_mode", "sideways");
   EXPECT_NE(ptz::test::errorOf([&] {
               ptz::driver::makeHeads(p);
-            }).find("parameter 'onvif_move_mode' must be absolute or continuous"),
+            }).find("parameter 'onvif_move_mode' must be auto, absolute or continuous"),
             std::string::npos);
   p.set("onvif_move_mode", "continuous");
   p.set("onvif_left_url", "ftp://127.0.0.1:21");
