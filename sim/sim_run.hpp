@@ -114,7 +114,7 @@ class SimRun {
   std::chrono::steady_clock::time_point start_steady_;
   double next_state_t_ = 0;
   double current_frame_t_ = 0;
-  std::atomic<int64_t> awaiting_seq_{-1};
+  int64_t awaiting_seq_ = -1;  // the main thread's alone
   bool answered_ = false;
   // Served heads: the commands applied so far (the cameras' threads count them), and how many
   // there were when the controller's answer was seen, and when.

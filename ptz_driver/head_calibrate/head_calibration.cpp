@@ -17,12 +17,13 @@ std::string format(const char* pattern, double a, double b = 0, double c = 0, do
   return text;
 }
 
-double minZoom(const StereoRig& rig, size_t side) {
-  return rig.camera(side == 0 ? Side::kLeft : Side::kRight).minZoom();
-}
-
 Side sideOf(size_t s) {
   return s == 0 ? Side::kLeft : Side::kRight;
+}
+
+// The widest zoom: where pan and tilt are measured and the zoom chain starts.
+double minZoom(const StereoRig& rig, size_t side) {
+  return rig.camera(sideOf(side)).minZoom();
 }
 
 }  // namespace
