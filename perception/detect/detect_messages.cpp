@@ -83,4 +83,16 @@ ptzstereo::object_track_t toMessage(const Track& t, double now_s, double yaw_psd
   return m;
 }
 
+ptzstereo::object_3d_t viewObject(const Track& t) {
+  ptzstereo::object_3d_t obj{};
+  obj.class_name = t.class_name;
+  for (int i = 0; i < 3; ++i) obj.position_m[i] = t.position()[i];
+  copyMatrix(t.positionCovariance(), obj.covariance_m2);
+  obj.left_index = t.view_side == Side::kLeft ? t.view_region_index : -1;
+  obj.right_index = t.view_side == Side::kRight ? t.view_region_index : -1;
+  obj.radius_m = t.radius_m;
+  obj.orientation_wxyz[0] = 1;
+  return obj;
+}
+
 }  // namespace ptz::perception

@@ -24,5 +24,8 @@ ptzstereo::object_3d_t toMessage(const StereoObject& o, const std::string& class
 
 // A track at now_s (its age, time since its update and yaw variance then).
 ptzstereo::object_track_t toMessage(const Track& t, double now_s, double yaw_psd_rad2_s);
+// A track moved by one view alone (Tracker::updateFromViews), as an object of OBJECT_POSE: its
+// position and covariance, the view's region index and -1 for the other view.
+ptzstereo::object_3d_t viewObject(const Track& t);
 
 }  // namespace ptz::perception

@@ -60,6 +60,10 @@ void declareDetectParams(Params& p) {
   p.add("track_max_radius_ratio", t.max_radius_ratio, "",
         "tracks: a radius off the track's by more than this factor is not trusted as the centre",
         Range::above(1));
+  p.add("track_view_max_depth_age_s", t.view_max_depth_age_s, "s",
+        "tracks: a track hidden in one view is moved by the other view's region alone, this soon "
+        "after its last 3D measurement (its depth then from the prediction; 0: never)",
+        Range::atLeast(0));
   p.add("trusted_area_ratio", 1.3, "",
         "left/right area ratio (zoom-corrected) beyond which an object is not trusted as a centre",
         Range::above(1));
@@ -108,6 +112,7 @@ TrackerParams trackerParams(const Params& p) {
   t.max_radius_ratio = p.getDouble("track_max_radius_ratio");
   t.recover_speed_m_s = p.getDouble("track_recover_speed_m_s");
   t.rank_sigma_cap_m = p.getDouble("track_rank_sigma_cap_m");
+  t.view_max_depth_age_s = p.getDouble("track_view_max_depth_age_s");
   t.yaw_psd_rad2_s = p.getDouble("track_yaw_psd_rad2_s");
   t.yaw_gate_chi2 = p.getDouble("track_yaw_gate_chi2");
   return t;

@@ -55,7 +55,10 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     tm.yaw_rad = y.yaw_rad;
     tm.yaw_var_rad2 = y.variance_rad2;
   }
+  const std::vector<ViewMeasurement> one_view = viewMeasurements(
+      objects, lr, rr, lv, rv, class_names_, config_.stereo.pixel_sigma_px, tracker_.tracks(), t_s);
   tracker_.update(t_s, measurements);
+  tracker_.updateFromViews(t_s, one_view, lv, rv);
   const int64_t target_id = chooseTarget(t_s, &out->target_reason_changed);
   last_views_ = {lv, rv};
   processing_ms_.push_back(
@@ -94,9 +97,16 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
         toMessage(o, class_names_[static_cast<size_t>(o.class_index)],
                   objectRadiusM(lr[static_cast<size_t>(o.left)], o.position_head_m, lv), yaws[i]));
   }
+  // The target's object: the measurement that updated the locked track in this frame; or, when
+  // one view alone did, the track as it now is (the other view's index -1).
+  if (const Track* target = tracker_.find(target_id)) {
+    pose.target_index = target->object_index;
+    if (target->object_index < 0 && target->view_region_index >= 0) {
+      pose.objects.push_back(viewObject(*target));
+      pose.target_index = static_cast<int32_t>(pose.objects.size()) - 1;
+    }
+  }
   pose.num_objects = static_cast<int32_t>(pose.objects.size());
-  // The target's object: the measurement that updated the locked track in this frame.
-  if (const Track* target = tracker_.find(target_id)) pose.target_index = target->object_index;
 
   ptzstereo::object_tracks_t& tracks = out->tracks;
   tracks = {};
@@ -116,6 +126,7 @@ void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
   counters_["tracks_live"] = static_cast<int64_t>(tracker_.tracks().size());
   counters_["tracks_started"] = tracker_.tracksStarted();
   counters_["tracks_recovered"] = tracker_.recoveries();
+  counters_["track_view_updates"] = tracker_.viewUpdates();
   counters_["track_yaws_accepted"] = tracker_.yawsAccepted();
   counters_["track_yaws_refused"] = tracker_.yawsRefused();
   counters_["tracks_refused"] = tracker_.tracksRefused();

@@ -6,6 +6,8 @@
 #include <climits>
 #include <cmath>
 
+#include "perception/detection/disc_split.hpp"
+
 namespace ptz::perception {
 namespace {
 
@@ -58,6 +60,37 @@ bool inHue(const ColorClass& c, double hue_deg) {
 bool inWindow(const ColorClass& c, const Hsi& h, bool grey) {
   if (!inLevels(c, h.saturation, h.intensity)) return false;
   return grey ? greyInClass(c) : inHue(c, h.hue_deg);  // grey has no hue
+}
+
+// A region one disc explains this much of is that ball alone (its own edge's noise aside).
+constexpr double kOneBallCovered = 0.95;
+
+// The discs of a blob of one or more balls, as regions of their own (see Region::split).
+std::vector<Region> splitBlob(const std::vector<cv::Point>& contour, const cv::Mat& alone,
+                              const Region& blob, const ColorClass& c, double* covered) {
+  std::vector<Region> regions;
+  // The contour is in the scanned part's coordinates, the blob's box (and `alone`) in the image's.
+  const cv::Point shift = blob.bbox.tl() - cv::boundingRect(contour).tl();
+  std::vector<cv::Point> in_image(contour);
+  for (auto& p : in_image) p += shift;
+  const double min_radius_px = std::sqrt(c.min_area_px2 / M_PI);
+  for (const Disc& d : splitDiscs(in_image, alone, blob.bbox.tl(), min_radius_px, {}, covered)) {
+    Region r = blob;
+    r.centroid_px = d.centre_px;
+    r.area_px2 = M_PI * d.radius_px * d.radius_px;
+    if (r.area_px2 < c.min_area_px2 || r.area_px2 > c.max_area_px2) continue;
+    const int x0 = static_cast<int>(std::floor(d.centre_px.x - d.radius_px));
+    const int y0 = static_cast<int>(std::floor(d.centre_px.y - d.radius_px));
+    const int x1 = static_cast<int>(std::ceil(d.centre_px.x + d.radius_px));
+    const int y1 = static_cast<int>(std::ceil(d.centre_px.y + d.radius_px));
+    r.bbox = cv::Rect(x0, y0, x1 - x0 + 1, y1 - y0 + 1) & blob.bbox;
+    r.shape_distance = 0;
+    r.elongation = 0;
+    r.blob_bbox = blob.bbox;
+    r.arc_fraction = d.arc_fraction;
+    regions.push_back(r);
+  }
+  return regions;
 }
 
 }  // namespace
@@ -304,7 +337,19 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
         const ShapeScore score = huShape(mo, templates_[ci]);
         r.shape_distance = score.distance;
         r.elongation = score.elongation;
-        if (r.shape_distance > c.max_shape_distance || r.elongation > c.max_elongation) continue;
+        const bool shape_ok =
+            r.shape_distance <= c.max_shape_distance && r.elongation <= c.max_elongation;
+        // Balls of the class overlapping: each a disc of the blob; one ball with a sliver of
+        // another behind it (which the shape test lets through) is its disc alone.
+        if (c.shape == "circle") {
+          double covered = 1;
+          std::vector<Region> discs = splitBlob(contour, alone & m(bbox), r, c, &covered);
+          if (discs.size() >= 2 || (discs.size() == 1 && covered < kOneBallCovered)) {
+            regions.insert(regions.end(), discs.begin(), discs.end());
+            continue;
+          }
+        }
+        if (!shape_ok) continue;
       }
       regions.push_back(r);
     }

@@ -51,6 +51,12 @@ struct Region {
   cv::Rect bbox;
   double shape_distance = 0;
   double elongation = 0;
+  // A disc split from a blob of overlapping balls (disc_split.hpp): the blob's box, shared by
+  // the discs of one blob (empty: a region of its own), and the share of the disc's circumference
+  // seen. Its centroid is the circle's centre, its area the whole disc's.
+  cv::Rect blob_bbox;
+  double arc_fraction = 1;
+  bool split() const { return !blob_bbox.empty(); }
 };
 
 // From Hu's first two invariants phi1, phi2: the shape invariant sqrt(phi1^2 - phi2) / 2, which

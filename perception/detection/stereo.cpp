@@ -105,6 +105,15 @@ double objectRadiusM(const Region& region, const Eigen::Vector3d& position_head_
 
 namespace {
 
+constexpr int kTouchMarginPx = 2;
+constexpr double kTrustedArcFraction = 0.3;
+
+// A split disc's centre comes from part of its circle: twice a whole region's pixel sigma, and
+// more as less of the circle is seen (a third of it: 3.6 times).
+double splitSigmaFactor(const Region& r) {
+  return r.split() ? 2 * std::max(1.0, 0.6 / std::max(r.arc_fraction, 1e-3)) : 1.0;
+}
+
 bool touchesBorder(const cv::Rect& box, const CameraView& view) {
   return box.x <= 0 || box.y <= 0 || box.x + box.width >= view.width ||
          box.y + box.height >= view.height;
@@ -168,11 +177,64 @@ bool near(const Extent& a, const Extent& b, double margin_px) {
 // Whether a region comes within a margin of another region in the same image: one object may be
 // hiding part of the other, so neither centre is the object's.
 bool touchesAnother(const std::vector<Region>& regions, size_t index, int margin_px) {
-  const Extent e = extentOf(regions[index]);
+  const Region& r = regions[index];
+  const Extent e = extentOf(r);
   for (size_t i = 0; i < regions.size(); ++i) {
+    // The discs of one blob touch by nature: their centres are fitted to their own arcs.
+    if (r.split() && regions[i].blob_bbox == r.blob_bbox) continue;
     if (i != index && near(e, extentOf(regions[i]), margin_px)) return true;
   }
   return false;
+}
+
+// Whether a round region (a ball whole, or a disc split from a blob of them) could be either of
+// two tracks: two or more non-tentative tracks of its class predicted within half its radius of
+// its centre, one hidden behind the other, unless its size says it is the nearest of them (the
+// one in front: its predicted apparent radius is the nearest the region's).
+bool discAmbiguous(const std::vector<Region>& regions, size_t index, const std::string& class_name,
+                   const std::vector<Track>& tracks, double t_s, const CameraView& view) {
+  const Region& disc = regions[index];
+  const double radius_px = std::sqrt(disc.area_px2 / M_PI);
+  // A track nearer another disc of the same blob is that disc's.
+  const auto nearer_sibling = [&](const Eigen::Vector2d& px, double d_px) {
+    for (size_t i = 0; i < regions.size(); ++i) {
+      const Region& o = regions[i];
+      if (i != index && disc.split() && o.blob_bbox == disc.blob_bbox &&
+          std::hypot(px.x() - o.centroid_px.x, px.y() - o.centroid_px.y) < d_px) {
+        return true;
+      }
+    }
+    return false;
+  };
+  int n = 0;
+  double nearest_range_m = INFINITY, nearest_misfit = INFINITY, best_misfit = INFINITY;
+  for (const auto& t : tracks) {
+    if (t.state == TrackState::kTentative || t.class_name != class_name) continue;
+    const Eigen::Vector3d p = t.positionAt(t_s);
+    const Eigen::Vector2d px = view.project(p);
+    const double d_px =
+        px.allFinite() ? std::hypot(px.x() - disc.centroid_px.x, px.y() - disc.centroid_px.y) : 0;
+    if (!px.allFinite() || d_px > radius_px / 2 || nearer_sibling(px, d_px)) continue;
+    ++n;
+    const double range_m = (p - view.position_head_m).norm();
+    const double predicted_px = range_m > 0 ? view.intrinsics.fx * t.radius_m / range_m : 0;
+    const double misfit =
+        predicted_px > 0 ? std::abs(std::log(predicted_px / radius_px)) : INFINITY;
+    best_misfit = std::min(best_misfit, misfit);
+    if (range_m < nearest_range_m) nearest_range_m = range_m, nearest_misfit = misfit;
+  }
+  return n >= 2 && !(std::isfinite(nearest_misfit) && nearest_misfit <= best_misfit);
+}
+
+// Whether a region's objects are ambiguous: a round region with two tracks at its centre
+// (discAmbiguous); else a region whose box two tracks' predicted discs reach (objects merged into
+// one region, whose centre is neither's).
+bool ambiguous(const std::vector<Region>& regions, size_t index, const std::string& class_name,
+               const std::vector<Track>& tracks, double t_s, const CameraView& view) {
+  const Region& r = regions[index];
+  return r.split() || extentOf(r).disc
+             ? discAmbiguous(regions, index, class_name, tracks, t_s, view)
+             : tracksUnder(r.bbox, class_name, tracks, t_s, view) >= 2;
 }
 
 }  // namespace
@@ -183,7 +245,6 @@ std::vector<TrackMeasurement> trackMeasurements(
     const std::vector<std::string>& class_names, double trusted_area_ratio,
     const std::vector<Track>& tracks, double t_s) {
   const double area_scale = std::pow(left_view.intrinsics.fx / right_view.intrinsics.fx, 2);
-  constexpr int kTouchMarginPx = 2;
   std::vector<TrackMeasurement> out;
   for (size_t i = 0; i < objects.size(); ++i) {
     const StereoObject& o = objects[i];
@@ -195,19 +256,62 @@ std::vector<TrackMeasurement> trackMeasurements(
     m.covariance_m2 = o.covariance_m2;
     m.radius_m = objectRadiusM(l, o.position_head_m, left_view);
     m.object_index = static_cast<int>(i);
+    const double sigma_factor = std::max(splitSigmaFactor(l), splitSigmaFactor(r));
+    m.covariance_m2 *= sigma_factor * sigma_factor;
     const double ratio = l.area_px2 / (r.area_px2 * area_scale);
     if (touchesBorder(l.bbox, left_view) || touchesBorder(r.bbox, right_view)) {
       m.untrusted = "border";
     } else if (touchesAnother(left, static_cast<size_t>(o.left), kTouchMarginPx) ||
                touchesAnother(right, static_cast<size_t>(o.right), kTouchMarginPx)) {
       m.untrusted = "touching";
-    } else if (tracksUnder(l.bbox, m.class_name, tracks, t_s, left_view) >= 2 ||
-               tracksUnder(r.bbox, m.class_name, tracks, t_s, right_view) >= 2) {
+    } else if (ambiguous(left, static_cast<size_t>(o.left), m.class_name, tracks, t_s, left_view) ||
+               ambiguous(right, static_cast<size_t>(o.right), m.class_name, tracks, t_s,
+                         right_view)) {
       m.untrusted = "overlap";
+    } else if (std::min(l.arc_fraction, r.arc_fraction) < kTrustedArcFraction) {
+      m.untrusted = "split_arc";
     } else if (ratio > trusted_area_ratio || ratio < 1 / trusted_area_ratio) {
       m.untrusted = "lr_area";
     }
     out.push_back(m);
+  }
+  return out;
+}
+
+std::vector<ViewMeasurement> viewMeasurements(
+    const std::vector<StereoObject>& objects, const std::vector<Region>& left,
+    const std::vector<Region>& right, const CameraView& left_view, const CameraView& right_view,
+    const std::vector<std::string>& class_names, double sigma_px, const std::vector<Track>& tracks,
+    double t_s) {
+  std::vector<ViewMeasurement> out;
+  const std::vector<Region>* regions[2] = {&left, &right};
+  const CameraView* views[2] = {&left_view, &right_view};
+  for (int side = 0; side < 2; ++side) {
+    std::vector<bool> paired(regions[side]->size());
+    for (const StereoObject& o : objects)
+      paired[static_cast<size_t>(side == 0 ? o.left : o.right)] = true;
+    for (size_t i = 0; i < regions[side]->size(); ++i) {
+      const Region& r = (*regions[side])[i];
+      if (paired[i] || r.class_index < 0 ||
+          static_cast<size_t>(r.class_index) >= class_names.size()) {
+        continue;
+      }
+      const std::string& class_name = class_names[static_cast<size_t>(r.class_index)];
+      if (touchesBorder(r.bbox, *views[side]) ||
+          touchesAnother(*regions[side], i, kTouchMarginPx) ||
+          ambiguous(*regions[side], i, class_name, tracks, t_s, *views[side]) ||
+          r.arc_fraction < kTrustedArcFraction) {
+        continue;
+      }
+      ViewMeasurement m;
+      m.class_name = class_name;
+      m.side = side == 0 ? Side::kLeft : Side::kRight;
+      m.pixel = {r.centroid_px.x, r.centroid_px.y};
+      m.sigma_px = sigma_px * splitSigmaFactor(r);
+      m.radius_px = std::sqrt(r.area_px2 / M_PI);
+      m.region_index = static_cast<int>(i);
+      out.push_back(m);
+    }
   }
   return out;
 }

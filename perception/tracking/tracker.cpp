@@ -143,7 +143,7 @@ void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) {
   t->P.topLeftCorner<3, 3>() = measurementCovariance(m);
   t->P.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_speed_sigma_m_s, 2);
   t->P.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_accel_sigma_m_s2, 2);
-  t->t_s = t->last_update_s = t->last_seen_s = t_s;
+  t->t_s = t->last_update_s = t->last_seen_s = t->last_stereo_s = t_s;
   t->object_index = m.object_index;
   // The same object: its yaw goes on (a wrong one is refused and then restarted by the gate).
   correctYaw(t, m);
@@ -178,7 +178,7 @@ void Tracker::start(double t_s, const TrackMeasurement& m) {
   t.P.block<3, 3>(3, 3) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_speed_sigma_m_s, 2);
   t.P.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() * std::pow(p_.initial_accel_sigma_m_s2, 2);
   t.radius_m = m.radius_m;
-  t.t_s = t.first_s = t.last_update_s = t.last_seen_s = t_s;
+  t.t_s = t.first_s = t.last_update_s = t.last_seen_s = t.last_stereo_s = t_s;
   t.hits = 1;
   t.object_index = m.object_index;
   t.state = p_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
@@ -193,6 +193,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   for (auto& t : tracks_) {
     predict(&t, t_s);
     t.object_index = -1;
+    t.view_region_index = -1;
   }
   // The expired go before pairing: a stale track's grown covariance would gate anything.
   eraseExpired(t_s);
@@ -237,7 +238,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       t.radius_m =
           t.radius_m > 0 ? t.radius_m + p_.radius_filter * (m.radius_m - t.radius_m) : m.radius_m;
     }
-    t.last_update_s = t_s;
+    t.last_update_s = t.last_stereo_s = t_s;
     t.object_index = m.object_index;
     ++t.hits;
     updated[i] = true;
@@ -279,6 +280,76 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       continue;
     }
     start(t_s, m);
+  }
+}
+
+void Tracker::updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
+                              const CameraView& left, const CameraView& right) {
+  struct Gated {
+    size_t track, measurement;
+    Eigen::Vector2d innovation;
+    Eigen::Matrix<double, 2, 3> J;
+    Eigen::Matrix2d S;
+  };
+  std::vector<Gated> gated;
+  std::vector<int> per_track(tracks_.size()), per_measurement(measurements.size());
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    if (t.state != TrackState::kCoasting || t.object_index >= 0 || t.t_s != t_s ||
+        t_s - t.last_stereo_s > p_.view_max_depth_age_s) {
+      continue;
+    }
+    for (size_t j = 0; j < measurements.size(); ++j) {
+      const ViewMeasurement& m = measurements[j];
+      if (m.class_name != t.class_name || !m.pixel.allFinite()) continue;
+      const CameraView& view = m.side == Side::kLeft ? left : right;
+      const Eigen::Vector3d p = t.position();
+      const Eigen::Vector2d h = view.project(p);
+      if (!h.allFinite()) continue;
+      // The apparent radius at the predicted range must be the region's.
+      const double range_m = (p - view.position_head_m).norm();
+      const double radius_px = range_m > 0 ? view.intrinsics.fx * t.radius_m / range_m : 0;
+      if (radius_px > 0 && m.radius_px > 0 &&
+          std::max(radius_px / m.radius_px, m.radius_px / radius_px) > p_.max_radius_ratio) {
+        continue;
+      }
+      Gated g{i, j, m.pixel - h, {}, {}};
+      constexpr double kStepM = 1e-4;
+      for (int a = 0; a < 3; ++a) {
+        Eigen::Vector3d q = p;
+        q[a] += kStepM;
+        g.J.col(a) = (view.project(q) - h) / kStepM;
+      }
+      g.S = g.J * t.positionCovariance() * g.J.transpose() +
+            Eigen::Matrix2d::Identity() * m.sigma_px * m.sigma_px;
+      const Eigen::LDLT<Eigen::Matrix2d> ldlt(g.S);
+      if (!g.J.allFinite() || ldlt.info() != Eigen::Success) continue;
+      const double d2 = g.innovation.dot(ldlt.solve(g.innovation));
+      if (!(d2 <= p_.view_gate_chi2)) continue;
+      gated.push_back(g);
+      ++per_track[i];
+      ++per_measurement[j];
+    }
+  }
+  // Only where the pairing is unique: a region near two tracks, or a track near two regions, is
+  // no evidence of which is which.
+  for (const Gated& g : gated) {
+    if (per_track[g.track] != 1 || per_measurement[g.measurement] != 1) continue;
+    Track& t = tracks_[g.track];
+    const ViewMeasurement& m = measurements[g.measurement];
+    Eigen::Matrix<double, 2, 9> H = Eigen::Matrix<double, 2, 9>::Zero();
+    H.leftCols<3>() = g.J;
+    const Eigen::Matrix<double, 9, 2> K = t.P * H.transpose() * g.S.inverse();
+    t.x += K * g.innovation;
+    const Matrix9d IKH = Matrix9d::Identity() - K * H;
+    t.P = IKH * t.P * IKH.transpose() + K * (m.sigma_px * m.sigma_px) * K.transpose();
+    t.P = (t.P + t.P.transpose()) / 2;
+    t.state = TrackState::kConfirmed;
+    t.last_update_s = t.last_seen_s = t_s;
+    t.view_region_index = m.region_index;
+    t.view_side = m.side;
+    ++t.hits;
+    ++view_updates_;
   }
 }
 

@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "common/rig.hpp"
+
 namespace ptz::perception {
 
 struct TrackerParams {
@@ -53,6 +55,10 @@ struct TrackerParams {
   double yaw_psd_rad2_s = 0.05;
   double yaw_gate_chi2 = 10.83;
   int yaw_reset_misses = 3;
+  double view_gate_chi2 = 13.82;  // one-view updates: chi-square, 2 dof, p = 0.001
+  // One view fixes two directions; the third (depth) comes from the track, so only this soon after
+  // its last 3D measurement: a long-coasted depth has drifted (s).
+  double view_max_depth_age_s = 0.5;
 };
 
 enum class TrackState { kTentative, kConfirmed, kCoasting };
@@ -73,6 +79,18 @@ struct TrackMeasurement {
   double yaw_period_rad = M_PI / 2;
 };
 
+// A region of one camera that no stereo pair used: the object is hidden in the other view (behind
+// a look-alike in front, say). It moves a track that no 3D measurement took this frame, along the
+// image directions; the track's depth goes on by its prediction.
+struct ViewMeasurement {
+  std::string class_name;
+  Side side = Side::kLeft;
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  // distorted image coordinates
+  double sigma_px = 0.3;
+  double radius_px = 0;   // of a disc of the region's area
+  int region_index = -1;  // into that camera's regions
+};
+
 struct Track {
   int64_t id = 0;
   std::string class_name;
@@ -82,9 +100,13 @@ struct Track {
   double radius_m = 0;
   double t_s = 0;  // time of x and P
   double first_s = 0, last_update_s = 0, last_seen_s = 0;
+  double last_stereo_s = 0;  // its last 3D measurement (last_update_s counts one-view ones too)
   int hits = 0;
   int untrusted_updates = 0;
   int object_index = -1;  // the measurement that updated it in the last frame (-1: none)
+  // The one-view measurement that updated it in the last frame instead (-1: none), and its camera.
+  int view_region_index = -1;
+  Side view_side = Side::kLeft;
   // The filtered yaw (boxes; has_yaw false: none yet or a sphere), its variance at yaw_t_s, its
   // period, and the measured yaws refused in a row.
   bool has_yaw = false;
@@ -112,6 +134,15 @@ class Tracker {
   // One frame's measurements at capture time t_s. Times that go back start afresh (a restarted
   // source); ids are never reused.
   void update(double t_s, const std::vector<TrackMeasurement>& measurements);
+  // After update() at the same t_s: each confirmed track that no measurement updated, measured in
+  // 3D within view_max_depth_age_s, is moved by
+  // the one region of its class that alone is near its predicted image (2-dof Mahalanobis gate,
+  // an apparent radius within max_radius_ratio of its own), which no other such track is near
+  // either; and counts as updated (confirmed). views: the frame's cameras.
+  void updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
+                       const CameraView& left, const CameraView& right);
+  // Tracks moved by one view, since the start.
+  int64_t viewUpdates() const { return view_updates_; }
   const std::vector<Track>& tracks() const { return tracks_; }
   const Track* find(int64_t id) const;
   // Measurements not trusted as a centre, by reason, since the start.
@@ -152,6 +183,7 @@ class Tracker {
   int64_t tracks_refused_ = 0;
   int64_t yaws_accepted_ = 0;
   int64_t yaws_refused_ = 0;
+  int64_t view_updates_ = 0;
 };
 
 }  // namespace ptz::perception

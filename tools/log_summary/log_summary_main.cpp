@@ -87,7 +87,9 @@ int main(int argc, char** argv) {
   p.add("json", "", "also write the run's summary as JSON to this file");
   p.add("channel_prefix", "", "prefix of the project's channel names");
   p.add("target_class", "red_ball", "class of the tracked object (for centring and 3D error)");
-  p.add("settle_s", 2.0, "s", "centring is measured after this much time from the first frame",
+  p.add("settle_s", 2.0, "s",
+        "centring is measured after this much time from the first lock (the first pose with "
+        "a target)",
         ptz::Range::atLeast(0));
   p.add("csv", "", "also write the heads' true pan/tilt/zoom per frame (SIM_TRUTH) to this CSV");
   p.add("gaps_over_s", 0.0, "s",

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Geometry>
@@ -232,6 +233,15 @@ RunMetrics::Scored RunMetrics::score() const {
     }
     return static_cast<const TruthObject*>(nullptr);
   };
+  // Centring counts from settle_s after the first lock (the first pose with a target): before it
+  // the heads were searching, or had not yet turned to what they found.
+  std::optional<int64_t> lock_utime;
+  for (const auto& [seq, p] : pose_) {
+    if (p.target) {
+      lock_utime = p.utime;
+      break;
+    }
+  }
   int tracked = -1;              // name of the true object last tracked
   int watched = -1;              // the object whose visibility is followed
   bool hidden = false;           // it, since it was last fully visible
@@ -291,8 +301,9 @@ RunMetrics::Scored RunMetrics::score() const {
       s.reacquire_s.push_back(secondsBetween(reappeared_utime, utime));
       pending = false;
     }
-    if (!objects || secondsBetween(s.first_utime, utime) < settle_s_) continue;
-    // Centring of the object being tracked; before the first acquisition, the target class's.
+    if (!objects || !lock_utime || secondsBetween(*lock_utime, utime) < settle_s_) continue;
+    // Centring of the object being tracked (else, a pose's estimate not being a number, the target
+    // class's).
     const TruthObject* o = nullptr;
     for (const auto& c : *objects) {
       if (!o && c.name == tracked) o = &c;

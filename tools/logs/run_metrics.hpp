@@ -33,12 +33,13 @@ struct RunSummary {
   // time, and the phase margin it leaves to the paper's loop model.
   double delay_ms_p99 = NAN;
   double phase_margin_deg = NAN;
-  // The tracked true object to the image centre, both cameras, after settle_s; frames where it
-  // is behind either camera are left out (and counted outside the image). In VGA-equivalent px
-  // (scaled by 640 / width), so runs at every resolution compare.
+  // The tracked true object to the image centre, both cameras, from settle_s after the first lock
+  // (the first pose with a target; NaN: never locked); frames where it is behind either camera
+  // are left out (and counted outside the image). In VGA-equivalent px (scaled by 640 / width),
+  // so runs at every resolution compare.
   double centering_rms_px = NAN;
   double centering_max_px = NAN;
-  int64_t frames_target_outside_image = 0;  // after settle_s, either camera (or behind it)
+  int64_t frames_target_outside_image = 0;  // as centring is counted, either camera (or behind)
   double position_error_rms_m = NAN;        // OBJECT_POSE target vs the tracked true object
   double position_error_rms_pct_of_range = NAN;
   double position_error_max_pct_of_range = NAN;  // the worst single pose
@@ -98,7 +99,8 @@ class RunMetrics {
   // scored once the truth is there, and the numbers do not depend on the arrival order.
   RunSummary summary() const;
   // Pixel offsets (left x, left y, right x, right y) of the tracked true object from the image
-  // centres, by frame sequence number, after settle_s, where it is in front of both cameras.
+  // centres, by frame sequence number, from settle_s after the first lock, where it is in front of
+  // both cameras.
   std::map<int64_t, std::vector<double>> centeringByFrame() const;
   // Every frame seen (by any message), by sequence number.
   std::map<int64_t, FrameScore> frames() const;

@@ -22,7 +22,9 @@ int main(int argc, char** argv) {
   p.add("channel_prefix", "", "prefix of the project's channel names in the log");
   const ptz::tools::ReportOptions d;
   p.add("target_class", d.target_class.c_str(), "class of the tracked object");
-  p.add("settle_s", d.settle_s, "s", "summary.json's centring starts this long after the start",
+  p.add("settle_s", d.settle_s, "s",
+        "summary.json's centring starts this long after the first lock (the first pose with a "
+        "target)",
         ptz::Range::atLeast(0));
   p.add("dead_time_s", d.dead_time_s, "s", "the plant's dead time, added to the measured delay",
         ptz::Range::between(0, 60));

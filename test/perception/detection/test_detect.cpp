@@ -82,6 +82,41 @@ TEST(Detector, CentroidIsTheProjectionOfTheTrueCentreWithinOnePixel) {
   }
 }
 
+// Two red balls overlapping in the image, one 0.6 m behind the other and partly hidden, make
+// one blob: it is split into their discs, each centred on its ball's projection (the hidden one
+// from its visible arc), both marked split, the front one with more of its circle seen.
+TEST(Detector, OverlappingBallsOfOneClassAreSplitIntoTheirDiscs) {
+  const StereoRig rig = StereoRig::makeDefault();
+  const perception::Detector detector(defaultClasses());
+  const Eigen::Vector3d front(0.0, 0.05, 2.4), back(0.16, 0.0, 3.0);
+  sim::Scene scene;
+  scene.objects = {object("red_ball", sim::SceneObject::Shape::kSphere, front, kRed),
+                   object("red_ball", sim::SceneObject::Shape::kSphere, back, kRed)};
+  const sim::SimFrame f = render(rig, scene, {}, {});
+  for (Side side : {Side::kLeft, Side::kRight}) {
+    const auto regions = detector.detect(side == Side::kLeft ? f.left : f.right);
+    ASSERT_EQ(regions.size(), 2u) << ptz::sideName(side);
+    std::vector<double> arcs;
+    for (const auto& [p, tol_px] : {std::pair{front, 1.0}, std::pair{back, 1.5}}) {
+      const Eigen::Vector2d truth = rig.view(side, {}).project(p);
+      const perception::Region* nearest = &regions[0];
+      for (const auto& r : regions) {
+        if (std::hypot(r.centroid_px.x - truth.x(), r.centroid_px.y - truth.y()) <
+            std::hypot(nearest->centroid_px.x - truth.x(), nearest->centroid_px.y - truth.y())) {
+          nearest = &r;
+        }
+      }
+      EXPECT_TRUE(nearest->split());
+      EXPECT_NEAR(nearest->centroid_px.x, truth.x(), tol_px) << ptz::sideName(side);
+      EXPECT_NEAR(nearest->centroid_px.y, truth.y(), tol_px) << ptz::sideName(side);
+      arcs.push_back(nearest->arc_fraction);
+    }
+    // The front ball's circle is on the blob's outline but where the other shows beside it.
+    EXPECT_GT(arcs[0], arcs[1]) << ptz::sideName(side);
+    EXPECT_GT(arcs[1], 0.4) << ptz::sideName(side);
+  }
+}
+
 TEST(Detector, RejectsAWrongColourAndAWrongShapeOfSimilarSize) {
   const StereoRig rig = StereoRig::makeDefault();
   const perception::Detector detector(defaultClasses());

@@ -440,7 +440,9 @@ TEST(TrackMeasurements, CentresThatAreNotTheObjectsAreNotTrusted) {
   // Two discs whose boxes overlap at a corner but whose discs are 10 px apart: not touching.
   const double d = (20 + 20 + 10) / std::sqrt(2.0);
   EXPECT_EQ(judge({disc(300, 240, 20), disc(300 + d, 240 + d, 20)}, {disc(280, 240, 20)}), "");
-  // One region over the predicted images of two tracks of its class: merged objects.
+  // One round region at the predicted images of two tracks of its class, one 0.5 m behind the
+  // other: of the nearer one's apparent size, it is that one (in front, hiding the other); of the
+  // farther one's, it could be either (the front one should look bigger): not trusted.
   std::vector<Track> two(2);
   for (int i = 0; i < 2; ++i) {
     two[i].id = i + 1;
@@ -451,9 +453,20 @@ TEST(TrackMeasurements, CentresThatAreNotTheObjectsAreNotTrusted) {
   two[0].x.head<3>() = Eigen::Vector3d(0.0, 0, 3);
   two[1].x.head<3>() = Eigen::Vector3d(0.03, 0, 2.5);
   const Eigen::Vector2d a = lv.project(two[0].position()), b = rv.project(two[0].position());
-  EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "overlap");
+  const double far_px = lv.intrinsics.fx * 0.1 / 3, near_px = lv.intrinsics.fx * 0.1 / 2.5;
+  EXPECT_EQ(judge({disc(a.x(), a.y(), far_px)}, {disc(b.x(), b.y(), far_px)}, two), "overlap");
+  EXPECT_EQ(judge({disc(a.x(), a.y(), near_px)}, {disc(b.x(), b.y(), near_px)}, two), "");
+  // A box-like region (not round) over two tracks' images: merged objects whatever its size.
+  EXPECT_EQ(judge({box(static_cast<int>(a.x()) - 30, static_cast<int>(a.y()) - 20, 60, 40)},
+                  {box(static_cast<int>(b.x()) - 30, static_cast<int>(b.y()) - 20, 60, 40)},
+                  [&] {
+                    std::vector<Track> boxes = two;
+                    for (auto& t : boxes) t.class_name = "green_box";
+                    return boxes;
+                  }()),
+            "overlap");
   two[1].x.head<3>() = Eigen::Vector3d(1.0, 0, 2.5);  // elsewhere: one track under it
-  EXPECT_EQ(judge({disc(a.x(), a.y(), 25)}, {disc(b.x(), b.y(), 25)}, two), "");
+  EXPECT_EQ(judge({disc(a.x(), a.y(), far_px)}, {disc(b.x(), b.y(), far_px)}, two), "");
 }
 
 // A box turning at 0.5 rad/s through the wrap of its 90-degree period, its yaw measured with

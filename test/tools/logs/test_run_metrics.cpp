@@ -39,12 +39,40 @@ TEST(RunMetrics, ATargetBehindACameraIsOutsideTheImageAndNotInTheCentring) {
     if (seq == 2) ball.position_m = {0, 0, -2};  // behind both cameras
     m.onTruth(syn::truth(seq, {ball}));
   }
+  m.onPose(syn::pose(0, "red_ball", kBall.position_m));  // locked from the first frame
   const auto s = m.summary();
   EXPECT_EQ(s.frames_target_outside_image, 1);
   EXPECT_EQ(s.centering_samples, 6);  // both cameras of frames 0, 1 and 3
   EXPECT_NEAR(s.centering_rms_px, kCentredPx, 1e-9);
   EXPECT_NEAR(s.centering_max_px, kCentredPx, 1e-9);
   EXPECT_EQ(m.centeringByFrame().count(2), 0u);
+}
+
+// Centring counts from settle_s after the first lock: not while the heads search (here the ball
+// 1 m off to the side), nor while they turn to it; a run that never locks has no centring.
+TEST(RunMetrics, CentringStartsSettleAfterTheFirstLock) {
+  RunMetrics m("red_ball", 0.25);  // 2.5 frames of 0.1 s
+  for (int64_t seq = 0; seq < 20; ++seq) {
+    syn::Object ball = kBall;
+    if (seq < 10) ball.position_m = {1.0, 0, 2};
+    m.onTruth(syn::truth(seq, {ball}));
+    if (seq < 8) m.onPose(syn::pose(seq));  // searching: no target
+    if (seq >= 8) m.onPose(syn::pose(seq, "red_ball", ball.position_m));
+  }
+  const auto centring = m.centeringByFrame();
+  ASSERT_FALSE(centring.empty());
+  EXPECT_EQ(centring.begin()->first, 11);  // locked at 8, 0.25 s later
+  const auto s = m.summary();
+  EXPECT_EQ(s.centering_samples, 2 * 9);
+  EXPECT_NEAR(s.centering_rms_px, kCentredPx, 1e-9);
+  EXPECT_NEAR(s.time_to_acquire_s, 0.8, 1e-6);
+  RunMetrics never("red_ball", 0.0);
+  for (int64_t seq = 0; seq < 5; ++seq) {
+    never.onTruth(syn::truth(seq, {kBall}));
+    never.onPose(syn::pose(seq));
+  }
+  EXPECT_TRUE(std::isnan(never.summary().centering_rms_px));
+  EXPECT_EQ(never.summary().centering_samples, 0);
 }
 
 // The same scene seen at 1080p (the cameras' field of view kept): the same VGA-equivalent offset.
@@ -64,6 +92,8 @@ TEST(RunMetrics, CentringIsInVgaEquivalentPixelsAtEveryResolution) {
   RunMetrics at_vga("red_ball", 0.0), at_hd("red_ball", 0.0);
   at_vga.onTruth(vga);
   at_hd.onTruth(hd);
+  at_vga.onPose(syn::pose(0, "red_ball", ball.position_m));
+  at_hd.onPose(syn::pose(0, "red_ball", ball.position_m));
   const auto a = at_vga.centeringByFrame().at(0), b = at_hd.centeringByFrame().at(0);
   ASSERT_EQ(a.size(), 4u);
   ASSERT_EQ(b.size(), 4u);
@@ -89,6 +119,7 @@ TEST(RunMetrics, ATargetNearlyNinetyDegreesOffTheAxisIsAPinholeOffsetNotAnAbsurd
   t.num_objects = 1;
   RunMetrics m("red_ball", 0.0);
   m.onTruth(t);
+  m.onPose(syn::pose(0, "red_ball", {o.position_m[0], o.position_m[1], o.position_m[2]}));
   const auto s = m.summary();
   EXPECT_EQ(s.frames_target_outside_image, 1);
   EXPECT_EQ(s.centering_samples, 2);
@@ -159,11 +190,12 @@ TEST(RunMetrics, TheTrackedObjectIsScoredByIdentityAndASwitchIsCounted) {
   EXPECT_EQ(frames.at(3).tracked, "ball_a");
   EXPECT_EQ(frames.at(8).tracked, "ball_b");
   EXPECT_EQ(frames.at(8).tracked_truth_m[0], 0.5);
-  // Centring: before the first acquisition the first of the class (ball_b), then the one
-  // tracked.
+  // Centring: from the first lock (frame 2: settle_s is 0 here), of the one tracked; none before.
   const auto centring = m.centeringByFrame();
   const double b_left = syn::kFocalPx * 0.55 / 2, b_right = syn::kFocalPx * 0.45 / 2;
-  EXPECT_NEAR(centring.at(0)[0], b_left, 1e-9);
+  EXPECT_EQ(centring.count(0), 0u);
+  EXPECT_EQ(centring.count(1), 0u);
+  EXPECT_NEAR(centring.at(2)[0], kCentredPx, 1e-9);
   EXPECT_NEAR(centring.at(4)[0], kCentredPx, 1e-9);
   EXPECT_NEAR(centring.at(4)[2], -kCentredPx, 1e-9);
   EXPECT_NEAR(centring.at(9)[0], b_left, 1e-9);

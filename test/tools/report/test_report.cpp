@@ -91,7 +91,6 @@ TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
   std::map<int64_t, ptzstereo::sim_truth_t> truth;
   std::vector<ptzstereo::object_pose_t> targeted;
   std::vector<double> errors_m, centring_px;
-  int64_t first_utime = -1;
   lcm::LogFile log(kFixture, "r");
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel == "STEREO_FRAME") ++frames;
@@ -99,11 +98,6 @@ TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
       ptzstereo::sim_truth_t t;
       ASSERT_GE(t.decode(ev->data, 0, ev->datalen), 0);
       truth[t.frame_seq] = t;
-      if (first_utime < 0) first_utime = t.utime;
-      if (t.utime - first_utime >= 500000) {
-        centring_px.push_back(offsetPx(t.left_camera, t.objects[0].position_m));
-        centring_px.push_back(offsetPx(t.right_camera, t.objects[0].position_m));
-      }
     }
     if (ev->channel == "OBJECT_POSE") {
       ptzstereo::object_pose_t p;
@@ -115,6 +109,15 @@ TEST(Report, EveryPlotAndASummaryThatMatchesTheLog) {
       }
       targeted.push_back(p);
     }
+  }
+  // Centring from 0.5 s (--settle-s) after the first lock: the first pose with a target.
+  ASSERT_FALSE(targeted.empty());
+  int64_t lock_utime = targeted.front().utime;
+  for (const auto& p : targeted) lock_utime = std::min(lock_utime, p.utime);
+  for (const auto& [seq, t] : truth) {
+    if (t.utime - lock_utime < 500000) continue;
+    centring_px.push_back(offsetPx(t.left_camera, t.objects[0].position_m));
+    centring_px.push_back(offsetPx(t.right_camera, t.objects[0].position_m));
   }
   for (const auto& p : targeted) {
     const auto& o = p.objects[static_cast<size_t>(p.target_index)];
