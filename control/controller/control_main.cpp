@@ -39,11 +39,24 @@ class ControlNode {
         [this](const std::string& ch, const ptzstereo::ptz_state_t&) { status_.countIn(ch, -1); },
         Delivery::kNewest);
     status_.expectInput(ch_tracks_);
+    reportSearch(p.getDouble("search_min_diameter_px"));
   }
 
   int run() { return serveUntilStopped(*lcm_, status_); }
 
  private:
+  // The search's pattern, once: its zoom levels, what each covers, the smallest it can find.
+  void reportSearch(double min_diameter_px) const {
+    for (const SearchLevel& l : follower_.controller().search().levels(min_diameter_px)) {
+      std::fprintf(stderr,
+                   "ptz-control: search at zoom %.2f: %d %s, %.1f %% of the search region; "
+                   "smallest it finds %.2f mrad (%.0f mm at 10 m)\n",
+                   l.zoom, l.waypoints, l.region_share >= 1 ? "sweep ends" : "views",
+                   100 * l.region_share, 1000 * l.min_angular_size_rad,
+                   10000 * l.min_angular_size_rad);
+    }
+  }
+
   void onTracks(const std::string& ch, const ptzstereo::object_tracks_t& m) {
     const int64_t received = wallUtime();
     if (!tracks_fresh_.admit(ch, m.utime, m.publish_utime, m.frame_seq, received)) return;

@@ -57,6 +57,18 @@ void declareControlParams(Params& p) {
         Range::atLeast(0));
   p.add("search_rate_rad_s", sd.rate_rad_s, "rad/s",
         "search: sweep speed (at most max_setpoint_rate)", Range::above(0));
+  p.add("search_zoom_step", sd.zoom_step, "ratio",
+        "search: each zoomed level's zoom is this times the last's, from the widest",
+        Range::atLeast(1));
+  p.add("search_max_zoom", sd.max_zoom, "ratio",
+        "search: the highest zoom it looks with (at most the lens's; the widest: no zoomed levels)",
+        Range::above(0));
+  p.add("search_view_dwell_s", sd.view_dwell_s, "s",
+        "search: time a zoomed view is looked at once the setpoint is there", Range::atLeast(0));
+  p.add("search_min_diameter_px", 5.0, "px",
+        "search: the smallest blob ptz-detect finds, across (for the report of the smallest "
+        "angular size the search can find: 2 sqrt(min_area_px2 / pi))",
+        Range::above(0));
   p.add("home_rate", d.home_rate, "rad/s", "speed of the return home after that (zoom: ratio/s)",
         Range::above(0));
   p.add("min_range_m", d.min_range_m, "m", "nearer targets are implausible and ignored",
@@ -121,6 +133,9 @@ ControllerParams controllerParamsFrom(const Params& p) {
   c.search.range_m = p.getDouble("search_range_m");
   c.search.dwell_s = p.getDouble("search_dwell_s");
   c.search.rate_rad_s = p.getDouble("search_rate_rad_s");
+  c.search.zoom_step = p.getDouble("search_zoom_step");
+  c.search.max_zoom = p.getDouble("search_max_zoom");
+  c.search.view_dwell_s = p.getDouble("search_view_dwell_s");
   c.smith_filter_s = p.getDouble("smith_filter_s");
   c.smith_extra_delay_s = p.getDouble("smith_extra_delay_s");
   c.kf_model = p.getString("kf_model");

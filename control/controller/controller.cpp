@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "control/controller/pointing.hpp"
 
@@ -266,16 +268,17 @@ void Controller::lost(double t_s, double dt) {
   resetTargetFilter();
   const Eigen::Vector2d from(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
   if (!search_.active()) search_.start(from, last_seen_direction_);
-  const Eigen::Vector2d dir = search_.direction(t_s, from);
+  const SearchView view = search_.view(t_s, setpoint_[0]);
   std::array<PtzPose, 2> goal = setpoint_;
   for (int i = 0; i < 2; ++i) {
     const Side side = i == 0 ? Side::kLeft : Side::kRight;
-    search_.aim(side, dir, &goal[i].pan_rad, &goal[i].tilt_rad);
-    goal[i].zoom = rig_.camera(side).minZoom();
+    search_.aim(side, view, &goal[i].pan_rad, &goal[i].tilt_rad);
+    goal[i].zoom = view.zoom;
   }
-  setState(ControlState::kSearching, "no target: searching, waypoint " +
-                                         std::to_string(search_.waypoint() + 1) + " of " +
-                                         std::to_string(search_.waypoints()));
+  std::ostringstream reason;
+  reason << "no target: searching, waypoint " << search_.waypoint() + 1 << " of "
+         << search_.waypoints() << " at zoom " << std::setprecision(3) << view.zoom;
+  setState(ControlState::kSearching, reason.str());
   slewTowards(goal, dt, std::min(p_.search.rate_rad_s, p_.max_setpoint_rate), p_.max_setpoint_rate);
 }
 

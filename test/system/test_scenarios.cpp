@@ -27,6 +27,8 @@ const std::map<std::string, std::function<double(const RunSummary&)>>& fields() 
        [](const RunSummary& s) { return s.position_error_rms_pct_of_range; }},
       {"position_error_max_pct_of_range",
        [](const RunSummary& s) { return s.position_error_max_pct_of_range; }},
+      {"position_error_settled_rms_pct_of_range",
+       [](const RunSummary& s) { return s.position_error_settled_rms_pct_of_range; }},
       {"frames_target_outside_image",
        [](const RunSummary& s) { return static_cast<double>(s.frames_target_outside_image); }},
       {"target_lost_s", [](const RunSummary& s) { return s.target_lost_s; }},

@@ -103,7 +103,7 @@ std::string number(double v) {
 struct RunMetrics::Scored {
   std::map<int64_t, FrameScore> frames;
   std::map<int64_t, std::vector<double>> centring;
-  std::vector<double> error_m, error_pct, reacquire_s, orientation_error_deg;
+  std::vector<double> error_m, error_pct, settled_error_pct, reacquire_s, orientation_error_deg;
   int64_t outside = 0, switches = 0, reappearances = 0;
   int64_t first_utime = 0;
   double period_s = 0;  // 0: unknown
@@ -266,6 +266,9 @@ RunMetrics::Scored RunMetrics::score() const {
         const double range_m = std::hypot(o->position_m[0], o->position_m[1], o->position_m[2]);
         s.error_m.push_back(err_m);
         if (range_m > 0) s.error_pct.push_back(100 * err_m / range_m);
+        if (range_m > 0 && lock_utime && secondsBetween(*lock_utime, utime) >= settle_s_) {
+          s.settled_error_pct.push_back(100 * err_m / range_m);
+        }
         if (o->box && p->second.has_orientation) {
           const double e = boxOrientationErrorDeg(p->second.orientation_wxyz, o->orientation_wxyz);
           if (std::isfinite(e)) s.orientation_error_deg.push_back(e);
@@ -380,6 +383,7 @@ RunSummary RunMetrics::summary() const {
   if (!sc.error_pct.empty()) {
     s.position_error_max_pct_of_range = *std::max_element(sc.error_pct.begin(), sc.error_pct.end());
   }
+  s.position_error_settled_rms_pct_of_range = rms(sc.settled_error_pct);
   s.position_samples = static_cast<int64_t>(sc.error_m.size());
   s.orientation_error_rms_deg = rms(sc.orientation_error_deg);
   s.orientation_samples = static_cast<int64_t>(sc.orientation_error_deg.size());
@@ -433,6 +437,8 @@ std::string RunSummary::toJson() const {
     << "  \"position_error_rms_m\": " << number(position_error_rms_m) << ",\n"
     << "  \"position_error_rms_pct_of_range\": " << number(position_error_rms_pct_of_range) << ",\n"
     << "  \"position_error_max_pct_of_range\": " << number(position_error_max_pct_of_range) << ",\n"
+    << "  \"position_error_settled_rms_pct_of_range\": "
+    << number(position_error_settled_rms_pct_of_range) << ",\n"
     << "  \"orientation_error_rms_deg\": " << number(orientation_error_rms_deg) << ",\n"
     << "  \"orientation_samples\": " << orientation_samples << ",\n"
     << "  \"target_lost_s\": " << number(target_lost_s) << ",\n"

@@ -43,6 +43,9 @@ struct RunSummary {
   double position_error_rms_m = NAN;        // OBJECT_POSE target vs the tracked true object
   double position_error_rms_pct_of_range = NAN;
   double position_error_max_pct_of_range = NAN;  // the worst single pose
+  // The same over the poses counted for centring (from settle_s after the first lock): the heads
+  // turned and zoomed to what they found.
+  double position_error_settled_rms_pct_of_range = NAN;
   // Frames without a pose or whose pose has no target, times the frame period (NaN when some
   // are lost but the period is unknown).
   double target_lost_s = 0;

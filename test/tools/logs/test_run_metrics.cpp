@@ -57,7 +57,10 @@ TEST(RunMetrics, CentringStartsSettleAfterTheFirstLock) {
     if (seq < 10) ball.position_m = {1.0, 0, 2};
     m.onTruth(syn::truth(seq, {ball}));
     if (seq < 8) m.onPose(syn::pose(seq));  // searching: no target
-    if (seq >= 8) m.onPose(syn::pose(seq, "red_ball", ball.position_m));
+    // The first two poses 2 cm off (zooming in), then exact.
+    std::array<double, 3> estimate = ball.position_m;
+    if (seq == 8 || seq == 9) estimate[2] += 0.02;
+    if (seq >= 8) m.onPose(syn::pose(seq, "red_ball", estimate));
   }
   const auto centring = m.centeringByFrame();
   ASSERT_FALSE(centring.empty());
@@ -66,6 +69,10 @@ TEST(RunMetrics, CentringStartsSettleAfterTheFirstLock) {
   EXPECT_EQ(s.centering_samples, 2 * 9);
   EXPECT_NEAR(s.centering_rms_px, kCentredPx, 1e-9);
   EXPECT_NEAR(s.time_to_acquire_s, 0.8, 1e-6);
+  // Frames 8 and 9: the ball at (1, 0, 2), sqrt(5) m away; 12 poses in all.
+  EXPECT_NEAR(s.position_error_rms_pct_of_range, 100 * 0.02 / std::sqrt(5.0) * std::sqrt(2.0 / 12),
+              1e-6);
+  EXPECT_NEAR(s.position_error_settled_rms_pct_of_range, 0, 1e-9);  // from frame 11 on
   RunMetrics never("red_ball", 0.0);
   for (int64_t seq = 0; seq < 5; ++seq) {
     never.onTruth(syn::truth(seq, {kBall}));
