@@ -12,6 +12,9 @@ bool lockable(const Track& t) {
 }
 
 constexpr double kPredictionHorizonS = 5.0;  // re-acquisition by prediction, at most this late
+// Re-acquisition by prediction takes the nearest candidate only when it is at most this share of
+// the next one's distance from the prediction.
+constexpr double kUnambiguousRatio = 0.5;
 
 std::string describe(const Track& t) {
   return "track " + std::to_string(t.id) + " (" + t.class_name + ")";
@@ -48,8 +51,16 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
   if (lost_ && t_s - lost_->t_s > kPredictionHorizonS) lost_.reset();
   const Track* best = nullptr;
   double best_cost = std::numeric_limits<double>::infinity();
+  double second_cost = best_cost;
+  int beside = 0;
   for (const auto& t : tracks) {
     if (!lockable(t) || t.class_name != class_) continue;
+    // Born beside the lost target (a merge of look-alikes): it may be the target or the other
+    // one; handing it the target is a guess.
+    if (lost_ && t.born_beside_id == lost_->id) {
+      ++beside;
+      continue;
+    }
     double cost;
     if (lost_) {
       // Where the lost target was heading (constant velocity, at most 1 s on: the acceleration
@@ -62,9 +73,23 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
       cost = std::atan2(std::hypot(p.x(), p.y()), p.z());
     }
     if (cost < best_cost) {
+      second_cost = best_cost;
       best_cost = cost;
       best = &t;
+    } else {
+      second_cost = std::min(second_cost, cost);
     }
+  }
+  // By prediction only when one candidate is clearly the nearest: two about as near the lost
+  // target's path are a coin toss, which waits for them to part.
+  if (best && lost_ && best_cost > kUnambiguousRatio * second_cost) {
+    reason_ = "lost track " + std::to_string(lost_->id) + " (" + class_ + "): tracks near its " +
+              "prediction too alike to choose";
+    return locked_id_;
+  }
+  if (!best && beside > 0) {
+    reason_ = "lost track " + std::to_string(lost_->id) + " (" + class_ + "): only tracks born " +
+              "beside it, which may be another look-alike";
   }
   if (best) {
     const bool again = lost_.has_value();

@@ -1,10 +1,11 @@
 // Which track the system follows (no LCM). Once locked it stays on that track while the track
 // exists, whatever else of its class appears; when the track is deleted the selector remembers
 // where it was going and, for 5 s, takes the confirmed track of the class nearest that
-// prediction. Without that it takes the confirmed track of the class nearest the home optical
-// axis (+z of the head frame), never the largest. Requests (by class, track id or image
-// point) change the choice; a request that cannot be met is refused with a reason and changes
-// nothing.
+// prediction, when it is clearly the nearest (at most half the next one's distance) and was not
+// born beside the lost one (in a merge of look-alikes, where it may be either). Without that it
+// takes the confirmed track of the class nearest the home optical axis (+z of the head frame),
+// never the largest. Requests (by class, track id or image point) change the choice; a request that
+// cannot be met is refused with a reason and changes nothing.
 #pragma once
 
 #include <Eigen/Core>

@@ -14,6 +14,9 @@ namespace {
 
 using Matrix9d = Eigen::Matrix<double, 9, 9>;
 
+// A track born this many radii from another's prediction was born beside it (a merge).
+constexpr double kBesideRadii = 4;
+
 // Transition and white-jerk process noise of the constant-acceleration model over dt.
 void motionModel(double dt, double q, Matrix9d* F, Matrix9d* Q) {
   const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
@@ -182,6 +185,13 @@ void Tracker::start(double t_s, const TrackMeasurement& m) {
   t.hits = 1;
   t.object_index = m.object_index;
   t.state = p_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
+  double beside_m = INFINITY;
+  for (const Track& other : tracks_) {
+    if (other.state == TrackState::kTentative || other.class_name != m.class_name) continue;
+    const double d = (other.position() - m.position_m).norm();
+    const double radius_m = std::max({other.radius_m, m.radius_m, 0.05});
+    if (d <= kBesideRadii * radius_m && d < beside_m) beside_m = d, t.born_beside_id = other.id;
+  }
   correctYaw(&t, m);
   tracks_.push_back(t);
 }

@@ -101,6 +101,9 @@ struct Track {
   double t_s = 0;  // time of x and P
   double first_s = 0, last_update_s = 0, last_seen_s = 0;
   double last_stereo_s = 0;  // its last 3D measurement (last_update_s counts one-view ones too)
+  // Born within a few of its radii of another track of its class (its prediction), as in a merge
+  // of look-alikes: that track's id (-1: born apart). Either could be the object the other was.
+  int64_t born_beside_id = -1;
   int hits = 0;
   int untrusted_updates = 0;
   int object_index = -1;  // the measurement that updated it in the last frame (-1: none)

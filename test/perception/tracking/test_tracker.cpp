@@ -346,6 +346,55 @@ TEST(TargetSelector, ReacquiresByThePredictionAfterTheTrackIsDeleted) {
   EXPECT_NE(s.selector.reason().find("by prediction"), std::string::npos) << s.selector.reason();
 }
 
+// In a merge of look-alikes the target's track can be lost while a track is born beside it:
+// that one may be the target or the other ball, so it is not handed the target by prediction;
+// nor is a candidate that is not clearly nearer the prediction than the next.
+TEST(TargetSelector, ATrackBornBesideTheLostTargetOrATieIsNotHandedTheTarget) {
+  Scene s;
+  TrackerParams params;
+  params.coast_s = 0.3;
+  s.tracker = Tracker(params);
+  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
+  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+  ASSERT_EQ(s.selector.targetId(), 1);
+  // A ball appears 0.2 m from the target (a look-alike merging with it): born beside track 1.
+  for (int k = 0; k < 3; ++k) {
+    s.step({at(path(s.t_s), "red_ball", 0.005, 0),
+            at(path(s.t_s) + Eigen::Vector3d(0, 0.2, 0), "red_ball", 0.005, 1)});
+  }
+  const Track* beside = nullptr;
+  for (const auto& t : s.tracker.tracks()) {
+    if (t.id != 1) beside = &t;
+  }
+  ASSERT_NE(beside, nullptr);
+  EXPECT_EQ(beside->born_beside_id, 1);
+  const int64_t beside_id = beside->id;
+  // Only it is seen from now on: track 1 is deleted, the target is not handed to the newcomer.
+  for (int k = 0; k < 20; ++k) s.step({at(path(s.t_s) + Eigen::Vector3d(0, 0.2, 0))});
+  EXPECT_EQ(s.tracker.find(1), nullptr);
+  ASSERT_NE(s.tracker.find(beside_id), nullptr);
+  EXPECT_EQ(s.selector.targetId(), -1);
+  EXPECT_NE(s.selector.reason().find("born beside"), std::string::npos) << s.selector.reason();
+}
+
+TEST(TargetSelector, TwoCandidatesAboutAsNearThePredictionAreATieThatWaits) {
+  Scene s;
+  TrackerParams params;
+  params.coast_s = 0.3;
+  s.tracker = Tracker(params);
+  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
+  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+  for (int k = 0; k < 15; ++k) s.step({});  // deleted
+  ASSERT_EQ(s.selector.targetId(), -1);
+  // Two balls 0.6 m above and below where the target went: neither is clearly it.
+  for (int k = 0; k < 4; ++k) {
+    s.step({at(path(s.t_s) + Eigen::Vector3d(0, 0.6, 0), "red_ball", 0.005, 0),
+            at(path(s.t_s) - Eigen::Vector3d(0, 0.55, 0), "red_ball", 0.005, 1)});
+  }
+  EXPECT_EQ(s.selector.targetId(), -1);
+  EXPECT_NE(s.selector.reason().find("too alike"), std::string::npos) << s.selector.reason();
+}
+
 TEST(TargetSelector, RequestsAreMetOrRefusedWithoutChangingTheTarget) {
   Scene s;
   for (int k = 0; k < 5; ++k) {
