@@ -29,7 +29,8 @@ TEST(ClosedLoop, TracksABallOnAFigureEightCentredInBothCameras) {
   EXPECT_EQ(run->counters["ptz-sim"]["frames_published"], 600);
   EXPECT_EQ(run->counters["ptz-sim"]["lockstep_timeouts"], 0);
   EXPECT_EQ(s.frames_processed, 600);
-  EXPECT_GE(s.centering_samples, 2 * 540);  // both cameras, every frame after 2 s
+  // Both cameras, every frame from 2 s (60 frames) after the lock (frame 2, below).
+  EXPECT_EQ(s.centering_samples, 2 * (600 - 2 - 60));
   EXPECT_LE(s.centering_rms_px, 10.0);
   EXPECT_EQ(s.frames_target_outside_image, 0);
   EXPECT_LE(s.position_error_rms_pct_of_range, 0.5);
