@@ -698,6 +698,31 @@ void onvif_requests() {
                                           ptz::onvif::securityHeader(token)));
 }
 
+// fuzz_disc_split: masks of discs (size bytes, then a bit a pixel): two overlapping, one behind
+// another, three in a row, one alone, a square.
+void discMasks() {
+  struct Disc {
+    double x, y, r;
+  };
+  const auto mask = [](int w, int h, const std::vector<Disc>& discs, bool square) {
+    Bytes b = {static_cast<uint8_t>(w - 8), static_cast<uint8_t>(h - 8)};
+    b.resize(2 + static_cast<size_t>(w * h + 7) / 8, 0);
+    for (int i = 0; i < w * h; ++i) {
+      const int x = i % w, y = i / w;
+      bool in = square && x >= w / 4 && x < 3 * w / 4 && y >= h / 4 && y < 3 * h / 4;
+      for (const Disc& d : discs) in = in || std::hypot(x - d.x, y - d.y) <= d.r;
+      if (in) b[2 + static_cast<size_t>(i) / 8] |= static_cast<uint8_t>(1u << (i % 8));
+    }
+    return b;
+  };
+  write("fuzz_disc_split", "two_overlapping", mask(64, 48, {{22, 24, 12}, {38, 22, 10}}, false));
+  write("fuzz_disc_split", "one_behind", mask(64, 48, {{36, 22, 9}, {30, 24, 13}}, false));
+  write("fuzz_disc_split", "three_in_a_row",
+        mask(96, 40, {{20, 20, 10}, {36, 21, 10}, {54, 19, 11}}, false));
+  write("fuzz_disc_split", "one", mask(40, 40, {{20.3, 19.6, 12}}, false));
+  write("fuzz_disc_split", "square", mask(40, 40, {}, true));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -716,5 +741,6 @@ int main(int argc, char** argv) {
   logs();
   foxglove();
   onvif_requests();
+  discMasks();
   return 0;
 }

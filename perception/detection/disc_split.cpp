@@ -10,6 +10,7 @@ namespace {
 constexpr int kArcBins = 36;
 constexpr int kMinArcRunBins = 4;  // 40 degrees of the circle in one piece
 constexpr double kEnoughShare = 0.9;
+constexpr size_t kMaxPoints = 1000;
 
 double tolerance(const DiscSplitParams& p, double radius_px) {
   return std::max(p.inlier_px, p.inlier_share * radius_px);
@@ -118,7 +119,11 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
                              const DiscSplitParams& p, double* covered_share) {
   std::vector<Disc> discs;
   if (contour.size() < 12 || mask.empty() || mask.type() != CV_8U) return discs;
-  std::vector<cv::Point2d> points(contour.begin(), contour.end());
+  // A long outline (a big or ragged blob, or a hostile image) is thinned evenly: RANSAC's cost
+  // is iterations x points.
+  const size_t stride = (contour.size() + kMaxPoints - 1) / kMaxPoints;
+  std::vector<cv::Point2d> points;
+  for (size_t i = 0; i < contour.size(); i += stride) points.emplace_back(contour[i]);
   std::vector<size_t> remaining(points.size());
   for (size_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
   const double max_radius_px = std::max(mask.cols, mask.rows) / 2.0 + 1;
