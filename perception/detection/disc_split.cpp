@@ -9,7 +9,7 @@ namespace {
 
 constexpr int kArcBins = 36;
 constexpr int kMinArcRunBins = 4;  // 40 degrees of the circle in one piece
-constexpr double kEnoughShare = 0.9;
+constexpr double kConfidence = 0.999;
 constexpr size_t kMaxPoints = 1000;
 
 double tolerance(const DiscSplitParams& p, double radius_px) {
@@ -132,6 +132,7 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
     cv::Point2d best_c;
     double best_r = 0;
     size_t best_count = 0;
+    double needed = p.iterations;
     for (int it = 0; it < p.iterations; ++it) {
       const size_t n = remaining.size();
       const size_t i = remaining[rng.uniform(0, static_cast<int>(n))];
@@ -143,8 +144,15 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
       if (!circleThrough(points[i], points[j], points[k], &c, &r)) continue;
       if (r < min_radius_px || r > max_radius_px || nearAccepted(discs, c, r)) continue;
       const size_t count = inliersOf(points, remaining, c, r, tolerance(p, r)).size();
-      if (count > best_count) best_count = count, best_c = c, best_r = r;
-      if (best_count >= kEnoughShare * n) break;  // one circle holds nearly all: a ball alone
+      if (count > best_count) {
+        best_count = count, best_c = c, best_r = r;
+        // Enough samples that one all on the best circle's arc came up with 99.9 % probability
+        // (RANSAC's adaptive count: log(1 - p) / log(1 - w^3), w its inlier share).
+        const double w = static_cast<double>(count) / static_cast<double>(n);
+        const double miss = 1 - w * w * w;
+        needed = miss <= 0 ? 0 : std::log(1 - kConfidence) / std::log(miss);
+      }
+      if (it + 1 >= needed) break;
     }
     if (best_count < 6) break;
     // Refined on its inliers, twice (the inliers of the refined circle may be more).
