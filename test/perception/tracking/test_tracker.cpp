@@ -304,6 +304,21 @@ struct Scene {
   }
 };
 
+// A ball moving along x at 0.5 m/s, 3 m away.
+Eigen::Vector3d alongX(double t_s) {
+  return {0.5 * t_s, 0, 3};
+}
+
+// A scene whose tracks are deleted after 0.3 s unseen, locked on the ball along x (track 1).
+Scene lockedOnTheBallAlongX() {
+  Scene s;
+  TrackerParams params;
+  params.coast_s = 0.3;
+  s.tracker = Tracker(params);
+  for (int k = 0; k < 30; ++k) s.step({at(alongX(s.t_s))});
+  return s;
+}
+
 }  // namespace
 
 TEST(TargetSelector, LocksNearTheAxisAndStaysWhenABiggerNearerOneAppears) {
@@ -326,12 +341,8 @@ TEST(TargetSelector, LocksNearTheAxisAndStaysWhenABiggerNearerOneAppears) {
 }
 
 TEST(TargetSelector, ReacquiresByThePredictionAfterTheTrackIsDeleted) {
-  Scene s;
-  TrackerParams params;
-  params.coast_s = 0.3;
-  s.tracker = Tracker(params);
-  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
-  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+  Scene s = lockedOnTheBallAlongX();
+  const auto path = alongX;
   ASSERT_EQ(s.selector.targetId(), 1);
   for (int k = 0; k < 15; ++k) s.step({});  // 0.5 s: deleted
   EXPECT_EQ(s.selector.targetId(), -1);
@@ -347,15 +358,10 @@ TEST(TargetSelector, ReacquiresByThePredictionAfterTheTrackIsDeleted) {
 }
 
 // In a merge of look-alikes the target's track can be lost while a track is born beside it:
-// that one may be the target or the other ball, so it is not handed the target by prediction;
-// nor is a candidate that is not clearly nearer the prediction than the next.
-TEST(TargetSelector, ATrackBornBesideTheLostTargetOrATieIsNotHandedTheTarget) {
-  Scene s;
-  TrackerParams params;
-  params.coast_s = 0.3;
-  s.tracker = Tracker(params);
-  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
-  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+// that one may be the target or the other ball, so it is not handed the target by prediction.
+TEST(TargetSelector, ATrackBornBesideTheLostTargetIsNotHandedTheTarget) {
+  Scene s = lockedOnTheBallAlongX();
+  const auto path = alongX;
   ASSERT_EQ(s.selector.targetId(), 1);
   // A ball appears 0.2 m from the target (a look-alike merging with it): born beside track 1.
   for (int k = 0; k < 3; ++k) {
@@ -377,13 +383,10 @@ TEST(TargetSelector, ATrackBornBesideTheLostTargetOrATieIsNotHandedTheTarget) {
   EXPECT_NE(s.selector.reason().find("born beside"), std::string::npos) << s.selector.reason();
 }
 
+// Nor is a candidate that is not clearly nearer the prediction than the next.
 TEST(TargetSelector, TwoCandidatesAboutAsNearThePredictionAreATieThatWaits) {
-  Scene s;
-  TrackerParams params;
-  params.coast_s = 0.3;
-  s.tracker = Tracker(params);
-  auto path = [](double t) { return Eigen::Vector3d(0.5 * t, 0, 3); };
-  for (int k = 0; k < 30; ++k) s.step({at(path(s.t_s))});
+  Scene s = lockedOnTheBallAlongX();
+  const auto path = alongX;
   for (int k = 0; k < 15; ++k) s.step({});  // deleted
   ASSERT_EQ(s.selector.targetId(), -1);
   // Two balls 0.6 m above and below where the target went: neither is clearly it.
