@@ -1,9 +1,9 @@
 // Splitting blobs into discs (perception/detection/disc_split.hpp) on masks made from the input:
 // the first two bytes give the size (8 .. 135 px a side), the rest the pixels, a bit each
 // (repeated to fill). Every outer contour of the mask is split. Properties: each disc is finite,
-// of a radius within the blob's box, centred within a radius of it, its arc share and rms in
-// range; the discs explain at least the share asked (or there are none); the same blob gives
-// the same discs.
+// of a radius within half the blob's shorter side, centred within a radius of its box, its arc
+// share and rms in range; the discs explain at least the share asked (or there are none); the same
+// blob gives the same discs.
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -36,7 +36,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!discs.empty()) {
       FUZZ_CHECK(covered >= params.min_covered && covered <= 1, std::to_string(covered));
     }
-    const double largest = std::max(box.width, box.height) / 2.0 + 1;
+    const double largest = 1.1 * std::min(box.width, box.height) / 2.0 + 2;
     for (const auto& d : discs) {
       FUZZ_CHECK(std::isfinite(d.centre_px.x) && std::isfinite(d.centre_px.y) &&
                      std::isfinite(d.radius_px),

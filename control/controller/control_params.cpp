@@ -58,10 +58,12 @@ void declareControlParams(Params& p) {
   p.add("search_rate_rad_s", sd.rate_rad_s, "rad/s",
         "search: sweep speed (at most max_setpoint_rate)", Range::above(0));
   p.add("search_zoom_step", sd.zoom_step, "ratio",
-        "search: each zoomed level's zoom is this times the last's, from the widest",
-        Range::atLeast(1));
+        "search: each zoomed level's zoom is this times the last's, from the widest (at most 8 "
+        "levels)",
+        Range::between(1.2, 100));
   p.add("search_max_zoom", sd.max_zoom, "ratio",
-        "search: the highest zoom it looks with (at most the lens's; the widest: no zoomed levels)",
+        "search: the highest zoom it looks with (at most max_zoom and the lens's; the widest: no "
+        "zoomed levels)",
         Range::above(0));
   p.add("search_view_dwell_s", sd.view_dwell_s, "s",
         "search: time a zoomed view is looked at once the setpoint is there", Range::atLeast(0));
@@ -134,7 +136,8 @@ ControllerParams controllerParamsFrom(const Params& p) {
   c.search.dwell_s = p.getDouble("search_dwell_s");
   c.search.rate_rad_s = p.getDouble("search_rate_rad_s");
   c.search.zoom_step = p.getDouble("search_zoom_step");
-  c.search.max_zoom = p.getDouble("search_max_zoom");
+  // Never beyond what the controller asks for when it tracks.
+  c.search.max_zoom = std::min(p.getDouble("search_max_zoom"), c.max_zoom);
   c.search.view_dwell_s = p.getDouble("search_view_dwell_s");
   c.smith_filter_s = p.getDouble("smith_filter_s");
   c.smith_extra_delay_s = p.getDouble("smith_extra_delay_s");

@@ -247,7 +247,7 @@ std::array<PtzPose, 2> Controller::follow(double t_s, const Observation& o,
           desired(Side::kRight, o, right_at_capture, dt)};
 }
 
-void Controller::lost(double t_s, double dt) {
+void Controller::lost(double t_s, double dt, const PtzPose& left_at_capture) {
   tracking_ = false;
   rate_ = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
   const double since = t_s - (last_seen_t_s_ ? *last_seen_t_s_ : *first_t_s_);
@@ -268,7 +268,7 @@ void Controller::lost(double t_s, double dt) {
   resetTargetFilter();
   const Eigen::Vector2d from(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
   if (!search_.active()) search_.start(from, last_seen_direction_);
-  const SearchView view = search_.view(t_s, setpoint_[0]);
+  const SearchView view = search_.view(t_s, setpoint_[0], left_at_capture);
   std::array<PtzPose, 2> goal = setpoint_;
   for (int i = 0; i < 2; ++i) {
     const Side side = i == 0 ? Side::kLeft : Side::kRight;
@@ -330,7 +330,7 @@ std::array<PtzPose, 2> Controller::update(double t_s, const std::optional<Observ
     if (!coasting)
       last_seen_direction_ = Eigen::Vector2d(setpoint_[0].pan_rad, setpoint_[0].tilt_rad);
   } else {
-    lost(t_s, dt);
+    lost(t_s, dt, left_at_capture);
   }
   since_target_s_ = t_s - (last_seen_t_s_ ? *last_seen_t_s_ : *first_t_s_);
   if (p_.mode == "smith") smithSent(t_s, left_at_capture, right_at_capture);

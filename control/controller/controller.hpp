@@ -143,7 +143,8 @@ class Controller {
   std::array<PtzPose, 2> follow(double t_s, const Observation& o, const PtzPose& left_at_capture,
                                 const PtzPose& right_at_capture, double dt);
   bool beyondLimits(const std::array<PtzPose, 2>& goal) const;
-  void lost(double t_s, double dt);
+  // left_at_capture: where the left head was (the search's views wait for it to get there).
+  void lost(double t_s, double dt, const PtzPose& left_at_capture);
   void setState(ControlState s, std::string reason);
 
   StereoRig rig_;

@@ -7,6 +7,13 @@
 #include "control/controller/pointing.hpp"
 
 namespace ptz::control {
+namespace {
+
+constexpr size_t kMaxZoomLevels = 8;
+// The head is at a view when within this share of its field of view (and of its zoom).
+constexpr double kNearShare = 0.1;
+
+}  // namespace
 
 Eigen::Vector2d fieldOfView(const CameraSpec& spec, double zoom) {
   const Intrinsics k = spec.intrinsicsAt(zoom);
@@ -21,7 +28,8 @@ std::vector<double> searchZooms(const SearchParams& p, const CameraSpec& spec) {
   std::vector<double> zooms;
   const double top = std::min(p.max_zoom, spec.maxZoom());
   if (!(p.zoom_step > 1) || !(top > spec.minZoom())) return zooms;
-  for (double z = spec.minZoom() * p.zoom_step; z < top * (1 - 1e-9); z *= p.zoom_step) {
+  for (double z = spec.minZoom() * p.zoom_step;
+       z < top * (1 - 1e-9) && zooms.size() < kMaxZoomLevels; z *= p.zoom_step) {
     zooms.push_back(z);
   }
   // The top zoom too, unless the last level is near it already.
@@ -38,11 +46,15 @@ std::vector<Eigen::Vector2d> zoomedViews(const SearchParams& p, const Eigen::Vec
                highs[2] = {p.pan_max_rad, p.tilt_max_rad};
   for (int a = 0; a < 2; ++a) {
     const double step = std::max(fov_rad[a] * (1 - p.overlap), 1e-3);
-    const double span = std::max(field_rad[a] - fov_rad[a], 0.0);
+    // The field within the region (shifted in from an edge, narrowed where the region is).
+    const double field = std::min(field_rad[a], highs[a] - lows[a] + fov_rad[a]);
+    const double span = std::max(field - fov_rad[a], 0.0);
+    const double mid = std::clamp(centre[a], lows[a] + span / 2,
+                                  std::max(lows[a] + span / 2, highs[a] - span / 2));
     const int n = static_cast<int>(std::ceil(span / step - 1e-9)) + 1;
     for (int i = 0; i < n; ++i) {
       const double offset = n > 1 ? -span / 2 + span * i / (n - 1) : 0.0;
-      axes[static_cast<size_t>(a)].push_back(std::clamp(centre[a] + offset, lows[a], highs[a]));
+      axes[static_cast<size_t>(a)].push_back(std::clamp(mid + offset, lows[a], highs[a]));
     }
   }
   std::vector<Eigen::Vector2d> views;
@@ -106,6 +118,7 @@ void Search::start(const Eigen::Vector2d& from, const std::optional<Eigen::Vecto
   index_ = 0;
   active_ = true;
   arrived_s_.reset();
+  setpoint_there_s_.reset();
   last_setpoint_.reset();
   has_last_seen_ = last_seen.has_value();
 }
@@ -144,7 +157,7 @@ bool Search::aim(Side side, const SearchView& view, double* pan_rad, double* til
   return aimAt(rig_, side, point, view.zoom, imageCentre(rig_.camera(side)), pan_rad, tilt_rad);
 }
 
-SearchView Search::view(double t_s, const PtzPose& left_setpoint) {
+SearchView Search::view(double t_s, const PtzPose& left_setpoint, const PtzPose& left_measured) {
   const Eigen::Vector2d setpoint(left_setpoint.pan_rad, left_setpoint.tilt_rad);
   if (waypoints_.empty()) return {setpoint, left_setpoint.zoom, false, 0};
   const SearchView& w = waypoints_[static_cast<size_t>(index_)];
@@ -160,16 +173,22 @@ SearchView Search::view(double t_s, const PtzPose& left_setpoint) {
   const bool there =
       (setpoint - goal).norm() <= 1e-3 && std::abs(left_setpoint.zoom - w.zoom) <= 1e-3;
   if (!there && !stuck) return w;
-  // Reached: a view is looked at for its dwell (the last seen direction for dwell_s), a sweep's
-  // end passed at once.
+  // Reached: a view is looked at for its dwell (the last seen direction for dwell_s) from when the
+  // head is there too (a zoom lens may take a second or two), a sweep's end passed at once.
   if (w.dwell) {
-    if (!arrived_s_) arrived_s_ = t_s;
+    if (!setpoint_there_s_) setpoint_there_s_ = t_s;
+    const Eigen::Vector2d fov = fieldOfView(rig_.left, w.zoom);
+    const bool head_there = std::abs(left_measured.pan_rad - goal.x()) <= kNearShare * fov.x() &&
+                            std::abs(left_measured.tilt_rad - goal.y()) <= kNearShare * fov.y() &&
+                            std::abs(left_measured.zoom - w.zoom) <= kNearShare * w.zoom;
+    if (!arrived_s_ && (head_there || t_s - *setpoint_there_s_ >= kMaxWaitS)) arrived_s_ = t_s;
     const double dwell_s = index_ == 0 && has_last_seen_ ? p_.dwell_s : p_.view_dwell_s;
-    if (t_s - *arrived_s_ < dwell_s) return w;
+    if (!arrived_s_ || t_s - *arrived_s_ < dwell_s) return w;
   }
   const int first_sweep = has_last_seen_ ? 1 : 0;
   ++index_;
   arrived_s_.reset();
+  setpoint_there_s_.reset();
   last_setpoint_.reset();
   if (index_ >= static_cast<int>(waypoints_.size())) index_ = first_sweep;
   return waypoints_[static_cast<size_t>(index_)];

@@ -80,9 +80,11 @@ class Search {
   void start(const Eigen::Vector2d& from, const std::optional<Eigen::Vector2d>& last_seen);
   bool active() const { return active_; }
   void stop() { active_ = false; }
-  // The view to look at now, given where the left setpoint is (a waypoint reached is passed on,
-  // a view once looked at for its dwell; the pattern repeats).
-  SearchView view(double t_s, const PtzPose& left_setpoint);
+  // The view to look at now, given where the left setpoint is and where the left head was at the
+  // last capture (a waypoint the setpoint reached is passed on; a view is looked at for its dwell
+  // from when the head got there, or kMaxWaitS after the setpoint did; the pattern repeats).
+  SearchView view(double t_s, const PtzPose& left_setpoint, const PtzPose& left_measured);
+  static constexpr double kMaxWaitS = 2.0;
   // Pan and tilt of `side` that look at the point range_m * zoom along a direction at that zoom.
   bool aim(Side side, const SearchView& view, double* pan_rad, double* tilt_rad) const;
   int waypoint() const { return index_; }
@@ -100,8 +102,9 @@ class Search {
   bool active_ = false;
   std::vector<SearchView> waypoints_;
   int index_ = 0;
-  bool has_last_seen_ = false;  // waypoint 0 is the last seen direction
-  std::optional<double> arrived_s_;
+  bool has_last_seen_ = false;       // waypoint 0 is the last seen direction
+  std::optional<double> arrived_s_;  // the head at the view (its dwell counts from here)
+  std::optional<double> setpoint_there_s_;
   std::optional<PtzPose> last_setpoint_;
 };
 

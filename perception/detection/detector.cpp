@@ -64,6 +64,7 @@ bool inWindow(const ColorClass& c, const Hsi& h, bool grey) {
 
 // A region one disc explains this much of is that ball alone (its own edge's noise aside).
 constexpr double kOneBallCovered = 0.95;
+constexpr int kMaxSplitsPerScan = 16;
 
 // The discs of a blob of one or more balls, as regions of their own (see Region::split).
 std::vector<Region> splitBlob(const std::vector<cv::Point>& contour, const cv::Mat& alone,
@@ -78,7 +79,8 @@ std::vector<Region> splitBlob(const std::vector<cv::Point>& contour, const cv::M
     Region r = blob;
     r.centroid_px = d.centre_px;
     r.area_px2 = M_PI * d.radius_px * d.radius_px;
-    if (r.area_px2 < c.min_area_px2 || r.area_px2 > c.max_area_px2) continue;
+    // A disc out of the class's sizes: the blob is not what the discs say it is.
+    if (r.area_px2 < c.min_area_px2 || r.area_px2 > c.max_area_px2) return {};
     const int x0 = static_cast<int>(std::floor(d.centre_px.x - d.radius_px));
     const int y0 = static_cast<int>(std::floor(d.centre_px.y - d.radius_px));
     const int x1 = static_cast<int>(std::ceil(d.centre_px.x + d.radius_px));
@@ -306,6 +308,7 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
     // Suzuki-Abe border following (the paper's chain-code contours), outer borders only.
     cv::findContours(m(roi).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, roi.tl());
     const size_t first = regions.size();
+    int splits = 0;
     for (const auto& contour : contours) {
       const cv::Rect bbox = cv::boundingRect(contour);
       if (window) {
@@ -340,8 +343,12 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
         const bool shape_ok =
             r.shape_distance <= c.max_shape_distance && r.elongation <= c.max_elongation;
         // Balls of the class overlapping: each a disc of the blob; one ball with a sliver of
-        // another behind it (which the shape test lets through) is its disc alone.
-        if (c.shape == "circle") {
+        // another behind it (which the shape test lets through) is its disc alone. Not for a
+        // round blob too small to hold two balls; at most kMaxSplitsPerScan blobs a class per
+        // scan (clutter of many blobs must not cost a RANSAC each).
+        if (c.shape == "circle" && (!shape_ok || r.area_px2 >= 2 * c.min_area_px2) &&
+            splits < kMaxSplitsPerScan) {
+          ++splits;
           double covered = 1;
           std::vector<Region> discs = splitBlob(contour, alone & m(bbox), r, c, &covered);
           if (discs.size() >= 2 || (discs.size() == 1 && covered < kOneBallCovered)) {

@@ -52,11 +52,15 @@ struct Region {
   double shape_distance = 0;
   double elongation = 0;
   // A disc split from a blob of overlapping balls (disc_split.hpp): the blob's box, shared by
-  // the discs of one blob (empty: a region of its own), and the share of the disc's circumference
-  // seen. Its centroid is the circle's centre, its area the whole disc's.
+  // the discs of one blob of its class (empty: a region of its own), and the share of the disc's
+  // circumference seen. Its centroid is the circle's centre, its area the whole disc's.
   cv::Rect blob_bbox;
   double arc_fraction = 1;
   bool split() const { return !blob_bbox.empty(); }
+  // Whether both are discs of one blob.
+  bool siblingOf(const Region& o) const {
+    return split() && o.class_index == class_index && o.blob_bbox == blob_bbox;
+  }
 };
 
 // From Hu's first two invariants phi1, phi2: the shape invariant sqrt(phi1^2 - phi2) / 2, which

@@ -8,7 +8,7 @@ namespace ptz::perception {
 namespace {
 
 constexpr int kArcBins = 36;
-constexpr int kMinArcRunBins = 4;  // 40 degrees of the circle in one piece
+constexpr double kMinArcRunDeg = 40;  // of the circle in one piece
 constexpr double kConfidence = 0.999;
 constexpr size_t kMaxPoints = 1000;
 
@@ -28,42 +28,55 @@ std::vector<size_t> inliersOf(const std::vector<cv::Point2d>& points,
   return in;
 }
 
-// The share of the circumference the points cover, in bins of 10 degrees, and the longest run of
-// covered bins (a ball's arc is whole; the sides of a square touch a circle in short bits).
+// The share of the circumference the points cover, and the longest arc of it in one piece, in
+// degrees (a ball's arc is whole; the sides of a square touch a circle in short bits). In bins
+// of 10 degrees, wider on a small circle, whose outline has fewer points (about 5.7 r of them):
+// each bin must be able to hold one.
 double arcFraction(const std::vector<cv::Point2d>& points, const std::vector<size_t>& in,
-                   const cv::Point2d& centre, int* longest_run) {
+                   const cv::Point2d& centre, double radius_px, double* longest_run_deg) {
+  const int n = std::clamp(static_cast<int>(std::lround(2 * M_PI * radius_px / 1.5)), 8, kArcBins);
   std::array<bool, kArcBins> bins{};
   for (size_t i : in) {
     const double a = std::atan2(points[i].y - centre.y, points[i].x - centre.x) + M_PI;
-    bins[static_cast<size_t>(std::min(kArcBins - 1, static_cast<int>(a / (2 * M_PI) * kArcBins)))] =
-        true;
+    bins[static_cast<size_t>(std::min(n - 1, static_cast<int>(a / (2 * M_PI) * n)))] = true;
   }
-  *longest_run = 0;
-  for (int start = 0, run = 0; start < 2 * kArcBins; ++start) {  // twice round: runs wrap
-    run = bins[static_cast<size_t>(start % kArcBins)] ? run + 1 : 0;
-    *longest_run = std::max(*longest_run, std::min(run, kArcBins));
+  int longest = 0;
+  for (int start = 0, run = 0; start < 2 * n; ++start) {  // twice round: runs wrap
+    run = bins[static_cast<size_t>(start % n)] ? run + 1 : 0;
+    longest = std::max(longest, std::min(run, n));
   }
-  return static_cast<double>(std::count(bins.begin(), bins.end(), true)) / kArcBins;
+  *longest_run_deg = 360.0 * longest / n;
+  return static_cast<double>(std::count(bins.begin(), bins.begin() + n, true)) / n;
 }
 
-bool inMask(const cv::Mat& mask, const cv::Point& origin, int x, int y) {
-  const int mx = x - origin.x, my = y - origin.y;
-  return mx >= 0 && my >= 0 && mx < mask.cols && my < mask.rows && mask.at<uchar>(my, mx) != 0;
-}
-
-// The share of the disc's pixels that are the region's.
-double insideShare(const cv::Mat& mask, const cv::Point& origin, const cv::Point2d& c, double r) {
-  int total = 0, inside = 0;
-  for (int y = static_cast<int>(std::ceil(c.y - r)); y <= static_cast<int>(std::floor(c.y + r));
-       ++y) {
-    for (int x = static_cast<int>(std::ceil(c.x - r)); x <= static_cast<int>(std::floor(c.x + r));
-         ++x) {
-      if (std::hypot(x - c.x, y - c.y) > r) continue;
-      ++total;
-      inside += inMask(mask, origin, x, y);
+// Whether at least `share` of the disc's pixels are the region's: stops as soon as too many are
+// not (a hostile blob's big circles cost little), pixels beyond the mask's box counted at once.
+bool mostlyInside(const cv::Mat& mask, const cv::Point& origin, const cv::Point2d& c, double r,
+                  double share) {
+  const int y0 = static_cast<int>(std::ceil(c.y - r)), y1 = static_cast<int>(std::floor(c.y + r));
+  const int x0 = static_cast<int>(std::ceil(c.x - r)), x1 = static_cast<int>(std::floor(c.x + r));
+  const double allowed = (1 - share) * M_PI * r * r;
+  double outside = 0;
+  const double r2 = r * r;
+  for (int y = y0; y <= y1; ++y) {
+    const double dy = y - c.y;
+    const double half = std::sqrt(std::max(0.0, r2 - dy * dy));  // the disc's row: |x - cx| <= half
+    const int from = static_cast<int>(std::ceil(c.x - half)),
+              to = static_cast<int>(std::floor(c.x + half));
+    if (to < from) continue;
+    const int my = y - origin.y;
+    if (my < 0 || my >= mask.rows) {
+      outside += to - from + 1;
+    } else {
+      const uchar* row = mask.ptr<uchar>(my);
+      for (int x = std::max(from, x0); x <= std::min(to, x1); ++x) {
+        const int mx = x - origin.x;
+        outside += (mx < 0 || mx >= mask.cols || row[mx] == 0) ? 1 : 0;
+      }
     }
+    if (outside > allowed) return false;
   }
-  return total > 0 ? static_cast<double>(inside) / total : 0.0;
+  return true;
 }
 
 // Two balls' discs cannot share a centre: one would hide the other whole, and a circle near
@@ -126,7 +139,8 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
   for (size_t i = 0; i < contour.size(); i += stride) points.emplace_back(contour[i]);
   std::vector<size_t> remaining(points.size());
   for (size_t i = 0; i < remaining.size(); ++i) remaining[i] = i;
-  const double max_radius_px = std::max(mask.cols, mask.rows) / 2.0 + 1;
+  // A disc almost wholly inside the region fits its shorter side (give or take its edge).
+  const double max_radius_px = 1.1 * std::min(mask.cols, mask.rows) / 2.0 + 2;
   cv::RNG rng(0x5eed);
   while (static_cast<int>(discs.size()) < p.max_discs && remaining.size() >= 6) {
     cv::Point2d best_c;
@@ -170,16 +184,16 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
     Disc d;
     d.centre_px = best_c;
     d.radius_px = best_r;
-    int longest_run = 0;
-    d.arc_fraction = arcFraction(points, in, best_c, &longest_run);
+    double longest_run_deg = 0;
+    d.arc_fraction = arcFraction(points, in, best_c, best_r, &longest_run_deg);
     double ss = 0;
     for (size_t i : in) {
       const double e = std::hypot(points[i].x - best_c.x, points[i].y - best_c.y) - best_r;
       ss += e * e;
     }
     d.rms_px = std::sqrt(ss / static_cast<double>(in.size()));
-    if (d.arc_fraction < p.min_arc_fraction || longest_run < kMinArcRunBins ||
-        insideShare(mask, mask_origin, best_c, best_r) < p.min_inside) {
+    if (d.arc_fraction < p.min_arc_fraction || longest_run_deg < kMinArcRunDeg ||
+        !mostlyInside(mask, mask_origin, best_c, best_r, p.min_inside)) {
       break;
     }
     discs.push_back(d);
@@ -200,7 +214,8 @@ std::vector<Disc> splitDiscs(const std::vector<cv::Point>& contour, const cv::Ma
       ++region;
       const cv::Point2d q(x + mask_origin.x, y + mask_origin.y);
       for (const Disc& d : discs) {
-        if (std::hypot(q.x - d.centre_px.x, q.y - d.centre_px.y) <= d.radius_px + 1) {
+        const double dx = q.x - d.centre_px.x, dy = q.y - d.centre_px.y;
+        if (dx * dx + dy * dy <= (d.radius_px + 1) * (d.radius_px + 1)) {
           ++covered;
           break;
         }

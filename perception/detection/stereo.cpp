@@ -106,8 +106,6 @@ double objectRadiusM(const Region& region, const Eigen::Vector3d& position_head_
 namespace {
 
 constexpr int kTouchMarginPx = 2;
-constexpr double kTrustedArcFraction = 0.3;
-
 // A split disc's centre comes from part of its circle: twice a whole region's pixel sigma, and
 // more as less of the circle is seen (a third of it: 3.6 times).
 double splitSigmaFactor(const Region& r) {
@@ -181,7 +179,7 @@ bool touchesAnother(const std::vector<Region>& regions, size_t index, int margin
   const Extent e = extentOf(r);
   for (size_t i = 0; i < regions.size(); ++i) {
     // The discs of one blob touch by nature: their centres are fitted to their own arcs.
-    if (r.split() && regions[i].blob_bbox == r.blob_bbox) continue;
+    if (r.siblingOf(regions[i])) continue;
     if (i != index && near(e, extentOf(regions[i]), margin_px)) return true;
   }
   return false;
@@ -199,7 +197,7 @@ bool discAmbiguous(const std::vector<Region>& regions, size_t index, const std::
   const auto nearer_sibling = [&](const Eigen::Vector2d& px, double d_px) {
     for (size_t i = 0; i < regions.size(); ++i) {
       const Region& o = regions[i];
-      if (i != index && disc.split() && o.blob_bbox == disc.blob_bbox &&
+      if (i != index && disc.siblingOf(o) &&
           std::hypot(px.x() - o.centroid_px.x, px.y() - o.centroid_px.y) < d_px) {
         return true;
       }
@@ -268,8 +266,6 @@ std::vector<TrackMeasurement> trackMeasurements(
                ambiguous(right, static_cast<size_t>(o.right), m.class_name, tracks, t_s,
                          right_view)) {
       m.untrusted = "overlap";
-    } else if (std::min(l.arc_fraction, r.arc_fraction) < kTrustedArcFraction) {
-      m.untrusted = "split_arc";
     } else if (ratio > trusted_area_ratio || ratio < 1 / trusted_area_ratio) {
       m.untrusted = "lr_area";
     }
@@ -299,8 +295,7 @@ std::vector<ViewMeasurement> viewMeasurements(
       const std::string& class_name = class_names[static_cast<size_t>(r.class_index)];
       if (touchesBorder(r.bbox, *views[side]) ||
           touchesAnother(*regions[side], i, kTouchMarginPx) ||
-          ambiguous(*regions[side], i, class_name, tracks, t_s, *views[side]) ||
-          r.arc_fraction < kTrustedArcFraction) {
+          ambiguous(*regions[side], i, class_name, tracks, t_s, *views[side])) {
         continue;
       }
       ViewMeasurement m;

@@ -60,9 +60,8 @@ double objectRadiusM(const Region& region, const Eigen::Vector3d& position_head_
 // discs split from one blob), so one may be hiding part of the other; "overlap": in either view
 // its region covers the predicted images of two or more tracks of its class, i.e. objects merged
 // into one region whose triangulated centre is neither's (for a split disc: two tracks predicted
-// within half its radius of its centre); "split_arc": a split disc in either view with less than
-// 30 % of its circle seen; "lr_area": the areas of the two views, corrected for their focal
-// lengths, differ by more than trusted_area_ratio). A split disc's pixel sigma is twice a
+// within half its radius of its centre); "lr_area": the areas of the two views, corrected for their
+// focal lengths, differ by more than trusted_area_ratio). A split disc's pixel sigma is twice a
 // region's, and more when less than 60 % of its circle is seen (as 0.6 / the share). tracks: the
 // tracker's tracks before this frame, predicted here to t_s.
 std::vector<TrackMeasurement> trackMeasurements(
@@ -72,9 +71,9 @@ std::vector<TrackMeasurement> trackMeasurements(
     const std::vector<Track>& tracks, double t_s);
 
 // Each camera's regions that no stereo pair used and that can be trusted as an object's centre
-// by the rules of trackMeasurements for one view (not at a border, touching another region, over
-// two tracks, or a split disc with less than 30 % of its circle seen), as one-view measurements
-// of pixel noise sigma_px (a split disc's more, as in trackMeasurements).
+// by the rules of trackMeasurements for one view (not at a border, touching another region, or
+// over two tracks), as one-view measurements of pixel noise sigma_px (a split disc's more, as in
+// trackMeasurements).
 std::vector<ViewMeasurement> viewMeasurements(
     const std::vector<StereoObject>& objects, const std::vector<Region>& left,
     const std::vector<Region>& right, const CameraView& left_view, const CameraView& right_view,

@@ -51,16 +51,15 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
   if (lost_ && t_s - lost_->t_s > kPredictionHorizonS) lost_.reset();
   const Track* best = nullptr;
   double best_cost = std::numeric_limits<double>::infinity();
-  double second_cost = best_cost;
+  double second_cost = best_cost, beside_cost = best_cost;
   int beside = 0;
   for (const auto& t : tracks) {
     if (!lockable(t) || t.class_name != class_) continue;
     // Born beside the lost target (a merge of look-alikes): it may be the target or the other
-    // one; handing it the target is a guess.
-    if (lost_ && t.born_beside_id == lost_->id) {
-      ++beside;
-      continue;
-    }
+    // one; handing it the target is a guess. It competes (a near one makes the choice a tie)
+    // but never wins.
+    const bool born_beside = lost_ && t.bornBeside(lost_->id);
+    beside += born_beside;
     double cost;
     if (lost_) {
       // Where the lost target was heading (constant velocity, at most 1 s on: the acceleration
@@ -72,7 +71,9 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
       const Eigen::Vector3d p = t.position();
       cost = std::atan2(std::hypot(p.x(), p.y()), p.z());
     }
-    if (cost < best_cost) {
+    if (born_beside) {
+      beside_cost = std::min(beside_cost, cost);
+    } else if (cost < best_cost) {
       second_cost = best_cost;
       best_cost = cost;
       best = &t;
@@ -80,6 +81,7 @@ int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
       second_cost = std::min(second_cost, cost);
     }
   }
+  second_cost = std::min(second_cost, beside_cost);
   // By prediction only when one candidate is clearly the nearest: two about as near the lost
   // target's path are a coin toss, which waits for them to part.
   if (best && lost_ && best_cost > kUnambiguousRatio * second_cost) {

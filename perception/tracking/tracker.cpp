@@ -152,11 +152,12 @@ void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) {
   correctYaw(t, m);
 }
 
-Track* Tracker::recoverable(double t_s, const TrackMeasurement& m) {
+Track* Tracker::recoverable(double t_s, const TrackMeasurement& m, const std::vector<bool>& taken) {
   Track* best = nullptr;
   double best_m = INFINITY;
-  for (auto& t : tracks_) {
-    if (t.state != TrackState::kCoasting || t.class_name != m.class_name) continue;
+  for (size_t i = 0; i < tracks_.size(); ++i) {
+    Track& t = tracks_[i];
+    if (taken[i] || t.state == TrackState::kTentative || t.class_name != m.class_name) continue;
     const double since_s = t_s - t.last_update_s;
     if (since_s > p_.recover_window_s) continue;  // longer: anything could be there
     if (radiusOutOfLine(t, m)) continue;
@@ -185,12 +186,16 @@ void Tracker::start(double t_s, const TrackMeasurement& m) {
   t.hits = 1;
   t.object_index = m.object_index;
   t.state = p_.confirm_hits <= 1 ? TrackState::kConfirmed : TrackState::kTentative;
-  double beside_m = INFINITY;
+  // Beside the tracks of its class seen in this very frame (a merge); not beside one that merely
+  // coasts (that may be this same object come back off its prediction).
   for (const Track& other : tracks_) {
-    if (other.state == TrackState::kTentative || other.class_name != m.class_name) continue;
+    if (other.state == TrackState::kTentative || other.class_name != m.class_name ||
+        other.last_seen_s != t_s) {
+      continue;
+    }
     const double d = (other.position() - m.position_m).norm();
     const double radius_m = std::max({other.radius_m, m.radius_m, 0.05});
-    if (d <= kBesideRadii * radius_m && d < beside_m) beside_m = d, t.born_beside_id = other.id;
+    if (d <= kBesideRadii * radius_m) t.born_beside_ids.push_back(other.id);
   }
   correctYaw(&t, m);
   tracks_.push_back(t);
@@ -207,10 +212,15 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   }
   // The expired go before pairing: a stale track's grown covariance would gate anything.
   eraseExpired(t_s);
-  // Every gated (track, measurement) pair of one class, nearest first, each used once.
-  std::vector<std::tuple<double, size_t, size_t>> pairs;
+  // Every gated (track, measurement) pair of one class, nearest first, each used once; first the
+  // pairs of tracks updated within recover_window_s, then sharp turns recovered, then the pairs
+  // of tracks longer unseen (a matching cascade: a long-coasting track's wide gate must not take
+  // the measurement of an object whose own track just lost it in a turn).
+  std::vector<std::tuple<bool, double, size_t, size_t>> pairs;
   const double max_log_det = 3 * std::log(p_.rank_sigma_cap_m * p_.rank_sigma_cap_m);
   for (size_t i = 0; i < tracks_.size(); ++i) {
+    const bool stale = tracks_[i].state != TrackState::kTentative &&
+                       t_s - tracks_[i].last_update_s > p_.recover_window_s;
     for (size_t j = 0; j < measurements.size(); ++j) {
       if (tracks_[i].class_name != measurements[j].class_name) continue;
       if (!measurements[j].position_m.allFinite()) continue;
@@ -219,7 +229,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       // Gated by d2, ranked by the likelihood's cost d2 + ln det S: a coasting track's wide
       // covariance makes every d2 small, which must not let it take another object's
       // measurement before that object's own, tighter track.
-      if (d2 <= p_.gate_chi2) pairs.emplace_back(d2 + std::min(log_det, max_log_det), i, j);
+      if (d2 <= p_.gate_chi2) pairs.emplace_back(stale, d2 + std::min(log_det, max_log_det), i, j);
     }
   }
   const double frame_dt = std::max(t_s - last_t_s_, 0.0);
@@ -227,8 +237,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   std::sort(pairs.begin(), pairs.end());
   std::vector<bool> track_used(tracks_.size()), meas_used(measurements.size());
   std::vector<bool> updated(tracks_.size());
-  for (const auto& [d2, i, j] : pairs) {
-    if (track_used[i] || meas_used[j]) continue;
+  const auto take = [&](size_t i, size_t j) {
     track_used[i] = meas_used[j] = true;
     Track& t = tracks_[i];
     const TrackMeasurement& m = measurements[j];
@@ -241,7 +250,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     if (!untrusted.empty()) {
       ++t.untrusted_updates;
       ++untrusted_counts_[untrusted];
-      continue;
+      return;
     }
     correct(&t, m);
     if (m.radius_m > 0) {
@@ -252,6 +261,28 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
     t.object_index = m.object_index;
     ++t.hits;
     updated[i] = true;
+  };
+  auto pair = pairs.begin();
+  for (; pair != pairs.end() && !std::get<0>(*pair); ++pair) {
+    const auto [stale, cost, i, j] = *pair;
+    if (!track_used[i] && !meas_used[j]) take(i, j);
+  }
+  // A trusted measurement no recent track's gate took, near where one that it missed would be
+  // (a sharp turn, a bounce), restarts that track.
+  for (size_t j = 0; j < measurements.size() && p_.recover_speed_m_s > 0; ++j) {
+    const TrackMeasurement& m = measurements[j];
+    if (meas_used[j] || !m.untrusted.empty() || !m.position_m.allFinite()) continue;
+    if (Track* t = recoverable(t_s, m, track_used)) {
+      const size_t i = static_cast<size_t>(t - tracks_.data());
+      restart(t, t_s, m);
+      ++t->hits;
+      ++recoveries_;
+      track_used[i] = meas_used[j] = updated[i] = true;
+    }
+  }
+  for (; pair != pairs.end(); ++pair) {
+    const auto [stale, cost, i, j] = *pair;
+    if (!track_used[i] && !meas_used[j]) take(i, j);
   }
   for (size_t i = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
@@ -278,13 +309,6 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
       ++untrusted_counts_[m.untrusted];
       continue;
     }
-    if (Track* t = p_.recover_speed_m_s > 0 ? recoverable(t_s, m) : nullptr) {
-      restart(t, t_s, m);
-      t->state = TrackState::kConfirmed;
-      ++t->hits;
-      ++recoveries_;
-      continue;
-    }
     if (tracks_.size() >= p_.max_tracks) {
       ++tracks_refused_;
       continue;
@@ -305,10 +329,13 @@ void Tracker::updateFromViews(double t_s, const std::vector<ViewMeasurement>& me
   std::vector<int> per_track(tracks_.size()), per_measurement(measurements.size());
   for (size_t i = 0; i < tracks_.size(); ++i) {
     Track& t = tracks_[i];
-    if (t.state != TrackState::kCoasting || t.object_index >= 0 || t.t_s != t_s ||
-        t_s - t.last_stereo_s > p_.view_max_depth_age_s) {
-      continue;
-    }
+    // Only tracks that no measurement touched this frame (seen untrusted is touched), with a
+    // recent depth, move; every other non-tentative track not updated by a measurement of its own
+    // whose predicted disc overlaps a region counts against that region's uniqueness (by place,
+    // not gate: a long-lost track's gate would take in anything).
+    if (t.state == TrackState::kTentative || t.t_s != t_s) continue;
+    const bool movable = t.state == TrackState::kCoasting && t.object_index < 0 &&
+                         t.last_seen_s != t_s && t_s - t.last_stereo_s <= p_.view_max_depth_age_s;
     for (size_t j = 0; j < measurements.size(); ++j) {
       const ViewMeasurement& m = measurements[j];
       if (m.class_name != t.class_name || !m.pixel.allFinite()) continue;
@@ -319,6 +346,14 @@ void Tracker::updateFromViews(double t_s, const std::vector<ViewMeasurement>& me
       // The apparent radius at the predicted range must be the region's.
       const double range_m = (p - view.position_head_m).norm();
       const double radius_px = range_m > 0 ? view.intrinsics.fx * t.radius_m / range_m : 0;
+      if (!movable) {
+        // Another object predicted where the region is (their discs overlap) may be what it shows,
+        // unless a measurement of its own updated it in this frame (its region is another).
+        if (t.object_index < 0 && (m.pixel - h).norm() <= m.radius_px + radius_px) {
+          ++per_measurement[j];
+        }
+        continue;
+      }
       if (radius_px > 0 && m.radius_px > 0 &&
           std::max(radius_px / m.radius_px, m.radius_px / radius_px) > p_.max_radius_ratio) {
         continue;

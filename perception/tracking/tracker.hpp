@@ -2,18 +2,20 @@
 // to, or starts one. Each track is a Kalman filter in the head frame with a constant-acceleration
 // model (white jerk), which follows curved paths that a constant-velocity model lags on.
 // Association is gated by the Mahalanobis distance with the measurement's own covariance and made
-// globally nearest-first within a class. Life cycle: tentative -> confirmed after confirm_hits
-// measurements; a confirmed track not updated in a frame is coasting (its values the prediction)
-// and is deleted after coast_s without being seen; a tentative one after tentative_max_gap_s.
-// A coasting track's acceleration fades (coast_accel_decay_s), so its prediction goes on straight;
-// a trusted measurement near enough to a coasting track's prediction restarts it (a sharp turn).
-// A measurement that is seen but not trusted as the object's centre (cut by an image border,
-// areas of the two views out of line, or a radius that jumps against the track's) keeps its
-// track alive without moving it.
+// globally nearest-first within a class, in a cascade: tracks updated within recover_window_s
+// first, then sharp turns recovered (below), then tracks longer unseen. Life cycle: tentative ->
+// confirmed after confirm_hits measurements; a confirmed track not updated in a frame is coasting
+// (its values the prediction) and is deleted after coast_s without being seen; a tentative one
+// after tentative_max_gap_s. A coasting track's acceleration fades (coast_accel_decay_s), so its
+// prediction goes on straight; a trusted measurement near enough to a coasting track's prediction
+// restarts it (a sharp turn). A measurement that is seen but not trusted as the object's centre
+// (cut by an image border, areas of the two views out of line, or a radius that jumps against the
+// track's) keeps its track alive without moving it.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -101,9 +103,12 @@ struct Track {
   double t_s = 0;  // time of x and P
   double first_s = 0, last_update_s = 0, last_seen_s = 0;
   double last_stereo_s = 0;  // its last 3D measurement (last_update_s counts one-view ones too)
-  // Born within a few of its radii of another track of its class (its prediction), as in a merge
-  // of look-alikes: that track's id (-1: born apart). Either could be the object the other was.
-  int64_t born_beside_id = -1;
+  // Born within 4 radii of other tracks of its class seen in the same frame, as in a merge of
+  // look-alikes: their ids (none: born apart). Either could be the object the other was.
+  std::vector<int64_t> born_beside_ids;
+  bool bornBeside(int64_t id) const {
+    return std::find(born_beside_ids.begin(), born_beside_ids.end(), id) != born_beside_ids.end();
+  }
   int hits = 0;
   int untrusted_updates = 0;
   int object_index = -1;  // the measurement that updated it in the last frame (-1: none)
@@ -137,11 +142,12 @@ class Tracker {
   // One frame's measurements at capture time t_s. Times that go back start afresh (a restarted
   // source); ids are never reused.
   void update(double t_s, const std::vector<TrackMeasurement>& measurements);
-  // After update() at the same t_s: each confirmed track that no measurement updated, measured in
-  // 3D within view_max_depth_age_s, is moved by
-  // the one region of its class that alone is near its predicted image (2-dof Mahalanobis gate,
-  // an apparent radius within max_radius_ratio of its own), which no other such track is near
-  // either; and counts as updated (confirmed). views: the frame's cameras.
+  // After update() at the same t_s: each confirmed track that no measurement touched (not even an
+  // untrusted one), measured in 3D within view_max_depth_age_s, is moved by the one region of its
+  // class that alone is near its predicted image (2-dof Mahalanobis gate, an apparent radius
+  // within max_radius_ratio of its own), which no other such track gates and no other
+  // non-tentative track not updated by a measurement of its own overlaps (its predicted disc);
+  // and counts as updated (confirmed). views: the frame's cameras.
   void updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
                        const CameraView& left, const CameraView& right);
   // Tracks moved by one view, since the start.
@@ -171,8 +177,9 @@ class Tracker {
   void correctYaw(Track* t, const TrackMeasurement& m);
   Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
   void start(double t_s, const TrackMeasurement& m);
-  // The coasting track of m's class whose prediction is nearest m within the recovery radius.
-  Track* recoverable(double t_s, const TrackMeasurement& m);
+  // The non-tentative track of m's class not taken this frame whose prediction is nearest m
+  // within the recovery radius.
+  Track* recoverable(double t_s, const TrackMeasurement& m, const std::vector<bool>& taken);
   void restart(Track* t, double t_s, const TrackMeasurement& m);
   void eraseExpired(double t_s);
 

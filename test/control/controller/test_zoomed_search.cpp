@@ -56,6 +56,22 @@ TEST(ZoomedSearch, ViewsTileTheWideFieldNearestTheCentreFirst) {
   for (const auto& v : zoomedViews(p, fov, wide, centre)) EXPECT_LE(v.x(), 0.35);
 }
 
+// A search that began at an edge of the region (looking straight up, at the tilt limit) tiles the
+// field shifted inside the region: as many views, none twice, all within it.
+TEST(ZoomedSearch, AtTheRegionsEdgeTheFieldShiftsInsideWithoutRepeatingViews) {
+  const StereoRig rig = StereoRig::makeDefault();
+  SearchParams p;
+  const Eigen::Vector2d wide = widestFieldOfView(rig.left), fov = fieldOfView(rig.left, 4);
+  const auto inside = zoomedViews(p, fov, wide, {0.0, 0.0});
+  const auto edge = zoomedViews(p, fov, wide, {0.0, p.tilt_max_rad});
+  EXPECT_EQ(edge.size(), inside.size());
+  for (size_t i = 0; i < edge.size(); ++i) {
+    EXPECT_LE(edge[i].y(), p.tilt_max_rad + 1e-12);
+    EXPECT_GE(edge[i].y(), p.tilt_min_rad - 1e-12);
+    for (size_t k = 0; k < i; ++k) EXPECT_GT((edge[i] - edge[k]).norm(), 1e-6) << i << " " << k;
+  }
+}
+
 // Whether both cameras at these poses image p at least margin_px inside their frames.
 bool inBothViews(const StereoRig& rig, const std::array<PtzPose, 2>& poses,
                  const Eigen::Vector3d& p, double margin_px) {

@@ -373,7 +373,7 @@ TEST(TargetSelector, ATrackBornBesideTheLostTargetIsNotHandedTheTarget) {
     if (t.id != 1) beside = &t;
   }
   ASSERT_NE(beside, nullptr);
-  EXPECT_EQ(beside->born_beside_id, 1);
+  EXPECT_TRUE(beside->bornBeside(1));
   const int64_t beside_id = beside->id;
   // Only it is seen from now on: track 1 is deleted, the target is not handed to the newcomer.
   for (int k = 0; k < 20; ++k) s.step({at(path(s.t_s) + Eigen::Vector3d(0, 0.2, 0))});

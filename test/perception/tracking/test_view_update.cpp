@@ -108,6 +108,26 @@ TEST(ViewUpdate, NoUpdateWhereThePairingIsNotUniqueOrTheSizeOrDepthIsWrong) {
     tracker.updateFromViews(t, {m}, s.left, s.right);
     EXPECT_EQ(tracker.viewUpdates(), 0);
   }
+  {  // A look-alike lost for 0.6 s (its depth too old to move it) whose predicted disc overlaps
+     // the region: the region may be it, so the target is not moved by it.
+    Tracker tracker;
+    const Eigen::Vector3d c = s.left.position_head_m;
+    double end = 0;
+    for (t = 0; t < 1.0; t += kFrameS) end = t;
+    const Eigen::Vector3d other =
+        c + (path(end + kFrameS) - c) * 1.15 + Eigen::Vector3d(0.02, 0, 0);
+    for (t = 0; t < 1.0; t += kFrameS) {
+      TrackMeasurement b = stereo(other);
+      b.object_index = 1;
+      std::vector<TrackMeasurement> both = {stereo(path(t))};
+      if (t < 0.4 - 1e-9) both.push_back(b);  // the look-alike unseen from 0.4 s on
+      tracker.update(t, both);
+    }
+    ASSERT_EQ(tracker.tracks().size(), 2u);
+    tracker.update(t, {});
+    tracker.updateFromViews(t, {seen(s.left, Side::kLeft, path(t))}, s.left, s.right);
+    EXPECT_EQ(tracker.viewUpdates(), 0);
+  }
   {  // A region twice the track's apparent size is another object.
     Tracker tracker = tracked(&t);
     tracker.update(t, {});
