@@ -63,6 +63,7 @@ struct Run {
   bool depth = true;
   std::string recording;  // a folder of writeSimRecording played by ptz-camera, else ptz-sim
   std::vector<std::string> detect_flags;
+  std::string sim_config = PTZ_SOURCE_DIR "/config/sim_default.yaml";
 };
 
 struct Series {
@@ -121,39 +122,39 @@ bool run(const Run& r) {
                  r.name.c_str());
     return false;
   }
-  std::vector<std::string> source_argv =
-      r.recording.empty() ? std::vector<std::string>{PTZ_SIM_BIN,
-                                                     "--lcm-url",
-                                                     url,
-                                                     "--config",
-                                                     PTZ_SOURCE_DIR "/config/sim_default.yaml",
-                                                     "--encoding",
-                                                     "jpeg",
-                                                     "--image-size",
-                                                     r.image_size,
-                                                     "--frame-rate-hz",
-                                                     std::to_string(r.rate_hz),
-                                                     "--duration-s",
-                                                     std::to_string(r.seconds),
-                                                     "--status-period-s",
-                                                     "0.5"}
-                          : std::vector<std::string>{PTZ_CAMERA_BIN,
-                                                     "--lcm-url",
-                                                     url,
-                                                     "--left-source",
-                                                     r.recording + "/left",
-                                                     "--right-source",
-                                                     r.recording + "/right",
-                                                     "--width",
-                                                     "1920",
-                                                     "--height",
-                                                     "1080",
-                                                     "--encoding",
-                                                     "jpeg",
-                                                     "--loop",
-                                                     "true",
-                                                     "--status-period-s",
-                                                     "0.5"};
+  std::vector<std::string> source_argv = r.recording.empty()
+                                             ? std::vector<std::string>{PTZ_SIM_BIN,
+                                                                        "--lcm-url",
+                                                                        url,
+                                                                        "--config",
+                                                                        r.sim_config,
+                                                                        "--encoding",
+                                                                        "jpeg",
+                                                                        "--image-size",
+                                                                        r.image_size,
+                                                                        "--frame-rate-hz",
+                                                                        std::to_string(r.rate_hz),
+                                                                        "--duration-s",
+                                                                        std::to_string(r.seconds),
+                                                                        "--status-period-s",
+                                                                        "0.5"}
+                                             : std::vector<std::string>{PTZ_CAMERA_BIN,
+                                                                        "--lcm-url",
+                                                                        url,
+                                                                        "--left-source",
+                                                                        r.recording + "/left",
+                                                                        "--right-source",
+                                                                        r.recording + "/right",
+                                                                        "--width",
+                                                                        "1920",
+                                                                        "--height",
+                                                                        "1080",
+                                                                        "--encoding",
+                                                                        "jpeg",
+                                                                        "--loop",
+                                                                        "true",
+                                                                        "--status-period-s",
+                                                                        "0.5"};
   ptz::test::ChildProcess source(withPriority(r.loop_priority, source_argv));
   if (r.recording.empty()) {
     ptz::test::handleUntil(
@@ -254,11 +255,13 @@ bool run(const Run& r) {
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz_bench_loop", "The closed loop in real time across processes.");
-  p.add("runs", "vga30,vga60,1080p30,1080p30-rec,1080p30-rec-480",
+  p.add("runs", "vga30,vga60,1080p30,1080p30-rec,1080p30-rec-480,vga30-markers",
         "comma-separated runs: vga30, vga60, 1080p30 (the simulator rendering 1080p), "
         "1080p30-rec (a recording of it, one period of the ball's path, played in a loop by "
         "ptz-camera), 1080p30-rec-480 "
-        "(the same, ptz-detect's full scans on the image reduced to 480 px)");
+        "(the same, ptz-detect's full scans on the image reduced to 480 px), vga30-markers, "
+        "1080p30-markers (config/sim_markers.yaml: the tagged cube followed by its tags, with "
+        "config/markers_tool.yaml)");
   p.add("seconds", 60.0, "s", "realtime duration of each run", ptz::Range::between(1, 3600));
   p.add("depth", true, "ptz-depth beside the loop");
   p.add("depth_priority", "nice", "ptz-depth's priority: nice (19) or idle (SCHED_IDLE)");
@@ -299,6 +302,12 @@ int main(int argc, char** argv) {
     if (name == "vga30") {
     } else if (name == "vga60") {
       r.rate_hz = 60;
+    } else if (name == "vga30-markers" || name == "1080p30-markers") {
+      if (name[0] == '1') r.image_size = "1080p";
+      r.sim_config = PTZ_SOURCE_DIR "/config/sim_markers.yaml";
+      r.detect_flags.insert(r.detect_flags.end(),
+                            {"--markers-config", PTZ_SOURCE_DIR "/config/markers_tool.yaml",
+                             "--target-class", "tool"});
     } else if (name == "1080p30") {
       r.image_size = "1080p";
     } else if (name == "1080p30-rec" || name == "1080p30-rec-480") {

@@ -44,6 +44,8 @@ PTZ_DEMO_PACKAGES=(
   build-essential cmake pkg-config ccache ninja-build
   liblcm-dev liblcm-bin libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev
+  # fiducial markers: AprilTag (ArUco is in OpenCV contrib)
+  libapriltag-dev
   libgpiod-dev libsystemd-dev libjpeg-dev
   # ONVIF cameras: SOAP parsed by libxml2, WS-Security digests by OpenSSL, HTTP by libcurl
   libxml2-dev libssl-dev libcurl4-openssl-dev

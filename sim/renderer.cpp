@@ -419,6 +419,61 @@ void Renderer::drawBackground(const CameraView& view, const RayRows& rays,
   if (scene_.chessboard.present) drawChessboard(view, rays, board_rect, row0, row1, bgr);
 }
 
+// The share of the pixel (u, v) that is white on the tags of the box face it hits at p_box
+// (box frame; inward: the face's inward normal; t: the ray's length), by 4 x 4 sub-pixel rays
+// through the face's plane, so a tag's corners fall where they are to a fraction of a pixel.
+// 1 where no tag is near.
+double Renderer::tagWhiteFraction(const SceneObject& object, const ObjectFrame& frame,
+                                  const Eigen::Matrix3d& R, const RayRows& rays,
+                                  const CameraView& view, int u, int v,
+                                  const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
+                                  double t) {
+  // The ray's change along the row, and down the column as the same turned by a right angle
+  // (scaled by fx / fy): a band holds its own rows only, and the image must not depend on bands.
+  const int u1 = std::min(u + 1, view.width - 1), u0 = std::max(u - 1, 0);
+  const cv::Vec2f& rc = rays.row(v)[u];
+  const cv::Vec2f gx =
+      (rays.row(v)[u1] - rays.row(v)[u0]) * (1.0f / static_cast<float>(std::max(1, u1 - u0)));
+  const float aspect = static_cast<float>(view.intrinsics.fx / view.intrinsics.fy);
+  const cv::Vec2f gy(-gx[1] * aspect, gx[0] * aspect);
+  const double footprint_m = 2 * t * std::max(cv::norm(gx), cv::norm(gy));
+  for (const SceneTag& tag : object.tags) {
+    const Eigen::Matrix3d& Rt = tag.rotation_object_tag;
+    if (Rt.col(2).dot(inward) < 0.99) continue;  // on another face
+    const double half = tag.size_m / 2;
+    const Eigen::Vector3d q = Rt.transpose() * (p_box - tag.centre_m);
+    if (std::abs(q.x()) > half + footprint_m || std::abs(q.y()) > half + footprint_m) continue;
+    const double cell_m = tag.size_m / tag.cells.cols;
+    const Eigen::Vector3d n = Rt.col(2);
+    const double plane = n.dot(tag.centre_m - frame.oc_box);
+    constexpr int kSub = 4;
+    double white = 0;
+    for (int s = 0; s < kSub * kSub; ++s) {
+      const float su = (static_cast<float>(s % kSub) + 0.5f) / kSub - 0.5f;
+      const float sv = (static_cast<float>(s / kSub) + 0.5f) / kSub - 0.5f;
+      const cv::Vec2f r = rc + gx * su + gy * sv;
+      const Eigen::Vector3d db =
+          frame.box_to_head.transpose() * (R * Eigen::Vector3d(r[0], r[1], 1));
+      const double den = n.dot(db);
+      if (std::abs(den) < 1e-12) {
+        white += 1;
+        continue;
+      }
+      const Eigen::Vector3d qs =
+          Rt.transpose() * (frame.oc_box + (plane / den) * db - tag.centre_m);
+      const double col = std::floor((qs.x() + half) / cell_m),
+                   row = std::floor((qs.y() + half) / cell_m);
+      if (col < 0 || row < 0 || col >= tag.cells.cols || row >= tag.cells.rows) {
+        white += 1;
+      } else {
+        white += tag.cells.at<uchar>(static_cast<int>(row), static_cast<int>(col)) / 255.0;
+      }
+    }
+    return white / (kSub * kSub);
+  }
+  return 1;
+}
+
 int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
                              const CameraView& view, const RayRows& rays, int row0, int row1,
                              cv::Mat* bgr) {
@@ -470,7 +525,8 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
       ++footprint;
       if (t >= out_depth[u]) continue;
       // Shading only for the pixels it shows.
-      Eigen::Vector3d normal;
+      // n_box: a box face's outward normal in the box's frame.
+      Eigen::Vector3d normal, n_box = Eigen::Vector3d::Zero();
       Eigen::Vector2d surface_m;  // texture coordinates on the surface
       if (sphere) {
         normal = (oc + t * d) / object.radius_m;
@@ -480,7 +536,7 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
                                                 std::asin(std::clamp(normal.y(), -1.0, 1.0)));
         }
       } else {
-        Eigen::Vector3d n_box = Eigen::Vector3d::Zero();
+        n_box = Eigen::Vector3d::Zero();
         n_box[axis] = db[axis] > 0 ? -1 : 1;
         normal = box_to_head * n_box;
         const Eigen::Vector3d p_box = oc_box + t * db;
@@ -495,6 +551,13 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
         const double texel_m = scene_.texture_m_per_texel / 4;
         const double level = textureLevel(atlas_, surface_m.x() / texel_m, surface_m.y() / texel_m);
         out[u] = out[u] * (0.5 + 0.5 * level);
+      }
+      if (!sphere && !object.tags.empty()) {
+        // A tag's black is the face's colour this dark (ink on a matt face).
+        constexpr double kInk = 0.08;
+        const double white =
+            tagWhiteFraction(object, frame, R, rays, view, u, v, oc_box + t * db, -n_box, t);
+        out[u] = out[u] * (kInk + (1 - kInk) * white);
       }
     }
   }

@@ -76,6 +76,10 @@ class Renderer {
   // the camera (hidden or not); where it is the nearest, owner_ becomes its index.
   int64_t drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
                      const CameraView& view, const RayRows& rays, int row0, int row1, cv::Mat* bgr);
+  double tagWhiteFraction(const SceneObject& object, const ObjectFrame& frame,
+                          const Eigen::Matrix3d& R, const RayRows& rays, const CameraView& view,
+                          int u, int v, const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
+                          double t);
   void drawChessboard(const CameraView& view, const RayRows& rays, const cv::Rect& rect, int row0,
                       int row1, cv::Mat* bgr);
 

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <random>
 
+#include "common/markers.hpp"
+#include "common/rig.hpp"
+
 namespace ptz::sim {
 
 Trajectory::Type Trajectory::parseType(const std::string& name, const std::string& where) {
@@ -73,7 +76,11 @@ double SceneObject::yaw(double t_s) const {
 }
 
 Eigen::Matrix3d SceneObject::rotationHeadObject(double t_s) const {
-  return Eigen::AngleAxisd(yaw(t_s), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  if (shape != Shape::kBox) return Eigen::Matrix3d::Identity();
+  return (Eigen::AngleAxisd(yaw(t_s), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitX()) *
+          Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitZ()))
+      .toRotationMatrix();
 }
 
 std::vector<Eigen::Vector3d> Chessboard::innerCorners() const {
@@ -108,6 +115,52 @@ const std::vector<std::string> kObjectFields = {"name",     "class",      "shape
                                                 "textured", "trajectory", "centre_m", "amplitude_m",
                                                 "period_s", "phase_rad",  "seed",     "arc_rad"};
 
+// A box's tags: each on one of its faces (its z axis along a box axis, into the box; its centre on
+// that face) and inside it.
+std::vector<SceneTag> readTags(const cv::FileNode& n, const Eigen::Vector3d& half_m,
+                               const std::string& where) {
+  std::vector<SceneTag> tags;
+  if (n["tags"].empty()) return tags;
+  const cv::FileNode list = n["tags"];
+  if (!list.isSeq()) throw ConfigError(fieldPath(where, "tags") + ": must be a list");
+  int i = 0;
+  for (const auto& t : list) {
+    const std::string w = where + ".tags[" + std::to_string(i++) + "]";
+    checkFields(t, {"family", "id", "size_m", "centre_m", "yaw_deg", "pitch_deg"}, w);
+    SceneTag tag;
+    if (!t["family"].empty()) tag.family = readString(t, "family", w);
+    tag.id = readInt(t, "id", w, Range::atLeast(0));
+    std::string why;
+    if (!markerCells(tag.family, tag.id, &tag.cells, &why)) throw ConfigError(w + ": " + why);
+    tag.size_m = readDouble(t, "size_m", w, Range::above(0));
+    tag.centre_m = vec3(t, "centre_m", w, Eigen::Vector3d::Zero());
+    tag.rotation_object_tag =
+        tagRotation(readDouble(t, "yaw_deg", w, 0, Range::between(-360, 360)),
+                    readDouble(t, "pitch_deg", w, 0, Range::between(-360, 360)));
+    const Eigen::Vector3d z = tag.rotation_object_tag.col(2);
+    int axis = 0;
+    z.cwiseAbs().maxCoeff(&axis);
+    const double inward = z[axis];
+    if (std::abs(std::abs(inward) - 1) > 1e-6 ||
+        std::abs(tag.centre_m[axis] + (inward > 0 ? half_m[axis] : -half_m[axis])) > 1e-6) {
+      throw ConfigError(w +
+                        ": the tag is on no face of the box (its z axis, into the box, must be "
+                        "a box axis and its centre_m on that face)");
+    }
+    for (int k = 0; k < 3; ++k) {
+      const double reach =
+          std::abs(tag.centre_m[k]) +
+          tag.size_m / 2 *
+              (std::abs(tag.rotation_object_tag(k, 0)) + std::abs(tag.rotation_object_tag(k, 1)));
+      if (k != axis && reach > half_m[k] + 1e-9) {
+        throw ConfigError(w + ": the tag reaches beyond its face");
+      }
+    }
+    tags.push_back(tag);
+  }
+  return tags;
+}
+
 SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   SceneObject o;
   if (!n.isMap()) checkFields(n, {}, w);  // throws "must be a map"; the shape decides the fields
@@ -116,7 +169,8 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   if (shape == "sphere") {
     known.push_back("radius_m");
   } else if (shape == "box") {
-    known.insert(known.end(), {"half_extents_m", "yaw_rad", "yaw_rate_rad_s"});
+    known.insert(known.end(),
+                 {"half_extents_m", "yaw_rad", "yaw_rate_rad_s", "pitch_rad", "roll_rad", "tags"});
   } else {
     throw ConfigError(fieldPath(w, "shape") + ": must be sphere or box, got '" + shape + "'");
   }
@@ -134,6 +188,9 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
     }
     o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0);
     o.yaw_rate_rad_s = readDouble(n, "yaw_rate_rad_s", w, 0.0, Range::between(-20, 20));
+    o.pitch_rad = readDouble(n, "pitch_rad", w, 0.0, Range::between(-M_PI, M_PI));
+    o.roll_rad = readDouble(n, "roll_rad", w, 0.0, Range::between(-M_PI, M_PI));
+    o.tags = readTags(n, o.half_extents_m, w);
   }
   const auto bgr = readNumbers(n, "color_bgr", 3, w, Range::between(0, 255));
   for (int k = 0; k < 3; ++k) o.color_bgr[k] = static_cast<uchar>(bgr[k]);

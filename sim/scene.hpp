@@ -30,6 +30,16 @@ struct Trajectory {
   static Type parseType(const std::string& name, const std::string& where);
 };
 
+// A fiducial marker printed on a box's face (common/markers.hpp: the family, the tag's frame).
+struct SceneTag {
+  std::string family = "apriltag_36h11";
+  int id = 0;
+  double size_m = 0.1;                                 // edge of the black square
+  Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  // in the box's frame, on a face
+  Eigen::Matrix3d rotation_object_tag = Eigen::Matrix3d::Identity();
+  cv::Mat cells;  // markerCells: 0 black, 255 white, the black border included
+};
+
 struct SceneObject {
   enum class Shape { kSphere, kBox };
   std::string name;
@@ -39,6 +49,9 @@ struct SceneObject {
   Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box
   double yaw_rad = 0.0;                                      // box, about the head's y axis
   double yaw_rate_rad_s = 0.0;                               // box: its yaw turns at this rate
+  // Box: then tilted about its x axis and rolled about its z axis (fixed).
+  double pitch_rad = 0.0, roll_rad = 0.0;
+  std::vector<SceneTag> tags;  // box: markers on its faces
   cv::Vec3b color_bgr{0, 0, 220};
   // The colour modulated by the backdrop's texture on the surface: gives dense stereo something
   // to match (plain objects only shade smoothly).
@@ -47,7 +60,7 @@ struct SceneObject {
 
   double boundingRadius() const;
   // A box's yaw at t_s (yaw_rad + yaw_rate_rad_s t_s), 0 for a sphere; and the rotation
-  // head <- object it makes about the head's y axis (identity for a sphere).
+  // head <- object, Ry(yaw) Rx(pitch) Rz(roll) (identity for a sphere).
   double yaw(double t_s) const;
   Eigen::Matrix3d rotationHeadObject(double t_s) const;
 };

@@ -60,7 +60,9 @@ void declareSimSceneParams(Params& p) {
                "texture_seed (7)");
   p.addSection("objects",
                "list of {name, class, shape: sphere|box, radius_m | half_extents_m, yaw_rad and "
-               "yaw_rate_rad_s (box, about the head's y axis), color_bgr, "
+               "yaw_rate_rad_s (box, about the head's y axis), pitch_rad and roll_rad (box, then "
+               "about its x and z), tags (box: [{family, id, size_m, centre_m, yaw_deg, "
+               "pitch_deg}], markers printed on its faces), color_bgr, "
                "textured (0; 1: the colour modulated by the surface texture, for dense stereo), "
                "trajectory: static|line|circle|figure_eight|random_walk|arc, centre_m, "
                "amplitude_m, period_s, phase_rad, seed, arc_rad}");

@@ -56,7 +56,9 @@ ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& fr
     ptzstereo::sim_object_truth_t t{};
     t.name = o.name;
     t.class_name = o.class_name;
-    t.shape = o.shape == SceneObject::Shape::kSphere ? "sphere" : "box";
+    t.shape = o.shape == SceneObject::Shape::kSphere ? "sphere"
+              : o.tags.empty()                       ? "box"
+                                                     : "tagged_box";
     const Eigen::Vector3d p = o.trajectory.position(frame.t_s);
     const Eigen::Vector3d v = o.trajectory.velocity(frame.t_s);
     for (int k = 0; k < 3; ++k) {

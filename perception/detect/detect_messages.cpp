@@ -1,5 +1,9 @@
 #include "perception/detect/detect_messages.hpp"
 
+#include <opencv2/imgproc.hpp>
+
+#include <Eigen/Geometry>
+
 #include "perception/tracking/yaw.hpp"
 
 namespace ptz::perception {
@@ -19,7 +23,45 @@ void copyYaw(double yaw_rad, double var_rad2, double* wxyz, double* covariance) 
   covariance[4] = var_rad2;
 }
 
+void copyRotation(const Eigen::Quaterniond& q, const Eigen::Matrix3d& covariance, double* wxyz,
+                  double* covariance_out) {
+  wxyz[0] = q.w(), wxyz[1] = q.x(), wxyz[2] = q.y(), wxyz[3] = q.z();
+  copyMatrix(covariance, covariance_out);
+}
+
 }  // namespace
+
+ptzstereo::detection_2d_t toMessage(const MarkerSighting& s, const std::string& object_name) {
+  ptzstereo::detection_2d_t d{};
+  d.class_name = object_name;
+  d.centroid_x_px = s.centre_px.x;
+  d.centroid_y_px = s.centre_px.y;
+  std::vector<cv::Point2f> quad;
+  for (const auto& c : s.corners_px) quad.emplace_back(c);
+  d.area_px2 = cv::contourArea(quad);
+  const cv::Rect box = s.bbox();
+  d.bbox_x_px = box.x;
+  d.bbox_y_px = box.y;
+  d.bbox_width_px = box.width;
+  d.bbox_height_px = box.height;
+  d.match_index = -1;
+  return d;
+}
+
+ptzstereo::object_3d_t toMessage(const MarkerObject& o, int left_index, int right_index) {
+  ptzstereo::object_3d_t obj{};
+  obj.class_name = o.name;
+  for (int r = 0; r < 3; ++r) obj.position_m[r] = o.pose.position_head_m[r];
+  copyMatrix(o.pose.covariance.bottomRightCorner<3, 3>(), obj.covariance_m2);
+  obj.left_index = left_index;
+  obj.right_index = right_index;
+  obj.radius_m = o.radius_m;
+  obj.has_orientation = true;
+  copyRotation(Eigen::Quaterniond(o.pose.rotation_head_object).normalized(),
+               o.pose.covariance.topLeftCorner<3, 3>(), obj.orientation_wxyz,
+               obj.orientation_covariance_rad2);
+  return obj;
+}
 
 ptzstereo::detection_2d_t toMessage(const Region& r, const DetectorParams& dp) {
   ptzstereo::detection_2d_t d{};
@@ -55,7 +97,7 @@ ptzstereo::object_3d_t toMessage(const StereoObject& o, const std::string& class
   return obj;
 }
 
-ptzstereo::object_track_t toMessage(const Track& t, double now_s, double yaw_psd_rad2_s) {
+ptzstereo::object_track_t toMessage(const Track& t, double now_s, const TrackerParams& p) {
   ptzstereo::object_track_t m{};
   m.id = t.id;
   m.class_name = t.class_name;
@@ -76,8 +118,12 @@ ptzstereo::object_track_t toMessage(const Track& t, double now_s, double yaw_psd
   m.untrusted_updates = t.untrusted_updates;
   m.has_orientation = t.has_yaw;
   m.orientation_wxyz[0] = 1;
-  if (t.has_yaw) {
-    copyYaw(t.yaw_rad, t.yawVarianceAt(now_s, yaw_psd_rad2_s), m.orientation_wxyz,
+  if (t.rotation.ok) {
+    m.has_orientation = true;
+    copyRotation(t.rotation.rotationAt(now_s), t.rotation.covarianceAt(now_s, p.rotation),
+                 m.orientation_wxyz, m.orientation_covariance_rad2);
+  } else if (t.has_yaw) {
+    copyYaw(t.yaw_rad, t.yawVarianceAt(now_s, p.yaw_psd_rad2_s), m.orientation_wxyz,
             m.orientation_covariance_rad2);
   }
   return m;

@@ -1,5 +1,7 @@
 #include "perception/detect/detect_params.hpp"
 
+#include <algorithm>
+
 #include "common/freshness.hpp"
 
 namespace ptz::perception {
@@ -95,6 +97,43 @@ void declareDetectParams(Params& p) {
         "full scans of wider images find their objects on the image reduced by 2, 4 or 8 (to this "
         "width or less), then detect at full resolution only around them (0: off)",
         Range::between(0, 4096));
+  const MarkerScanParams m;
+  p.add("markers_config", "",
+        "a YAML file whose section `markers` lists the fiducial marker classes, instead of the "
+        "config file's own (\"\": the config file's; none there: no markers)");
+  p.add("marker_bands", m.bands, "",
+        "markers: the image is searched for new tags in this many bands of rows, one a frame "
+        "(tracked "
+        "tags are looked for every frame in windows around their tracks)",
+        Range::between(1, 64));
+  p.add("marker_band_decimate", m.band_decimate, "",
+        "markers: libapriltag finds tags in a band on the image reduced by this (1: full "
+        "resolution, slower, finds smaller tags; windows are always at full resolution)",
+        Range::between(1, 4));
+  p.add("marker_corner_sigma_px", m.pose.corner_sigma_px, "px",
+        "markers: a tag corner's noise, the floor of the pose's covariance", Range::above(0));
+  p.add("marker_max_rms_px", m.pose.max_rms_px, "px",
+        "markers: a tagged object's pose whose reprojection RMS over both views exceeds this is "
+        "refused (tags that do not belong together)",
+        Range::above(0));
+  p.add("marker_max_corner_px", m.pose.max_corner_px, "px",
+        "markers: a pose with a tag corner this far off its fit in either view is refused (a tag "
+        "partly hidden: its corner found on the edge of what hides it)",
+        Range::above(0));
+  p.add("marker_max_hamming", m.detector.max_hamming, "bits",
+        "markers: tags read with more bits corrected than this are refused (false tags grow with "
+        "it)",
+        Range::between(0, 2));
+  p.add(
+      "track_rotation_accel_psd_rad2_s3", TrackerParams{}.rotation.accel_psd_rad2_s3, "rad^2/s^3",
+      "tracks: a tagged object turns at an angular velocity whose changes are white noise of this "
+      "power spectral density per axis",
+      Range::above(0));
+  p.addSection(
+      "markers",
+      "list of {name, detector: apriltag|aruco, family (apriltag_36h11, aruco_4x4_50, ...), "
+      "size_m, and ids: [..] or any (objects <name>#<id>) or tags: [{id, centre_m, yaw_deg, "
+      "pitch_deg}] (one object <name>)}");
   p.addSection("classes",
                "list of {name, hue_min_deg, hue_max_deg, saturation_min, saturation_max, "
                "intensity_min, intensity_max, shape: circle|square|any, "
@@ -115,6 +154,7 @@ TrackerParams trackerParams(const Params& p) {
   t.view_max_depth_age_s = p.getDouble("track_view_max_depth_age_s");
   t.yaw_psd_rad2_s = p.getDouble("track_yaw_psd_rad2_s");
   t.yaw_gate_chi2 = p.getDouble("track_yaw_gate_chi2");
+  t.rotation.accel_psd_rad2_s3 = p.getDouble("track_rotation_accel_psd_rad2_s3");
   return t;
 }
 
@@ -142,8 +182,38 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.detector.filter_size_px = p.getInt("filter_size_px");
   c.detector.morph_size_px = p.getInt("morph_size_px");
   if (c.detector.filter_size_px % 2 == 0) throw p.invalid("filter_size_px", "must be odd");
-  checkTargetClass(p, c.detector);
+  const std::string markers_path = p.getString("markers_config");
+  if (markers_path.empty()) {
+    c.markers =
+        markerClassesFromConfig(p.section("markers"), "config file '" + p.configPath() + "'");
+  } else {
+    const cv::FileStorage fs = openForRead(markers_path, "markers file");
+    if (fs["markers"].empty()) {
+      throw ConfigError("markers file '" + markers_path + "': no section `markers`");
+    }
+    c.markers = markerClassesFromConfig(fs["markers"], "markers file '" + markers_path + "'");
+  }
+  for (const auto& m : c.markers) {
+    for (const auto& colour : c.detector.classes) {
+      if (colour.name == m.name) {
+        throw ConfigError("config file '" + p.configPath() + "', markers: class '" + m.name +
+                          "' is also a colour class");
+      }
+    }
+  }
   c.target_class = p.getString("target_class");
+  const std::vector<std::string> names = markerObjectNames(c.markers);
+  if (std::find(names.begin(), names.end(), c.target_class) == names.end()) {
+    checkTargetClass(p, c.detector);
+  }
+  c.marker_scan.bands = p.getInt("marker_bands");
+  c.marker_scan.band_decimate = p.getDouble("marker_band_decimate");
+  c.marker_scan.pose.corner_sigma_px = p.getDouble("marker_corner_sigma_px");
+  c.marker_scan.pose.max_rms_px = p.getDouble("marker_max_rms_px");
+  c.marker_scan.pose.max_corner_px = p.getDouble("marker_max_corner_px");
+  c.marker_scan.pose.min_range_m = p.getDouble("min_range_m");
+  c.marker_scan.pose.max_range_m = p.getDouble("max_range_m");
+  c.marker_scan.detector.max_hamming = p.getInt("marker_max_hamming");
   c.stereo.max_epipolar_px = p.getDouble("max_epipolar_px");
   c.stereo.max_area_ratio = p.getDouble("max_area_ratio");
   c.stereo.pixel_sigma_px = p.getDouble("pixel_sigma_px");

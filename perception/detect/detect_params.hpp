@@ -10,12 +10,14 @@
 #include "perception/detection/orientation.hpp"
 #include "perception/detection/stereo.hpp"
 #include "perception/detection/windows.hpp"
+#include "perception/markers/marker_scan.hpp"
 #include "perception/tracking/tracker.hpp"
 
 namespace ptz::perception {
 
 // Declares target_class .. full_scan_max_width_px, the freshness of frames (frame_*) and of
-// TARGET_SELECT requests (select_*), and the config file's section `classes`.
+// TARGET_SELECT requests (select_*), the markers' (marker_*), and the config file's sections
+// `classes` and `markers`.
 void declareDetectParams(Params& p);
 
 // The tracker's parameters from track_*.
@@ -36,6 +38,9 @@ struct DetectConfig {
   OrientationParams orientation_params;
   int orientation_margin_px = 8;
   int orientation_max_per_frame = 4;
+  // Fiducial markers (the config file's section `markers`; none: not scanned for).
+  std::vector<MarkerClass> markers;
+  MarkerScanParams marker_scan;
 
   // From parsed parameters. The classes come from the config file, which is therefore required;
   // throws ConfigError naming the file, flag or field (no config file, a class's field, an even

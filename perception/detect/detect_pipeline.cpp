@@ -11,10 +11,26 @@
 namespace ptz::perception {
 namespace {
 
-std::vector<std::string> classNames(const DetectorParams& dp) {
+// The colour classes, then every tagged object's name (TARGET_SELECT may name either).
+std::vector<std::string> classNames(const DetectorParams& dp,
+                                    const std::vector<MarkerClass>& markers) {
   std::vector<std::string> names;
   for (const auto& c : dp.classes) names.push_back(c.name);
+  for (const auto& n : markerObjectNames(markers)) names.push_back(n);
   return names;
+}
+
+TrackMeasurement markerMeasurement(const MarkerObject& o, int object_index) {
+  TrackMeasurement m;
+  m.class_name = o.name;
+  m.position_m = o.pose.position_head_m;
+  m.covariance_m2 = o.pose.covariance.bottomRightCorner<3, 3>();
+  m.radius_m = o.radius_m;
+  m.object_index = object_index;
+  m.has_rotation = true;
+  m.rotation = Eigen::Quaterniond(o.pose.rotation_head_object).normalized();
+  m.rotation_covariance_rad2 = o.pose.covariance.topLeftCorner<3, 3>();
+  return m;
 }
 
 }  // namespace
@@ -24,9 +40,10 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
       rig_(std::move(rig)),
       detector_(config_.detector),
       tracker_(config_.tracker),
-      class_names_(classNames(detector_.params())),
+      class_names_(classNames(detector_.params(), config_.markers)),
       selector_(config_.target_class, class_names_, config_.pick_radius_px),
-      windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()) {}
+      windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()),
+      markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}) {}
 
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
                              std::string* why) {
@@ -55,6 +72,25 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     tm.yaw_rad = y.yaw_rad;
     tm.yaw_var_rad2 = y.variance_rad2;
   }
+  // Tags: windows around their tracks and a band, from the pixels decoded for the colours.
+  MarkerScan markers;
+  if (markers_.enabled()) {
+    const CropPixels crops[2] = {[&](const cv::Rect& r, cv::Mat* px, std::string* w) {
+                                   bool reused = false;
+                                   return left_pixels.crop(r, px, &reused, w);
+                                 },
+                                 [&](const cv::Rect& r, cv::Mat* px, std::string* w) {
+                                   bool reused = false;
+                                   return right_pixels.crop(r, px, &reused, w);
+                                 }};
+    if (!markers_.scan(tracker_.tracks(), t_s, lv, rv, config_.windows, crops, &markers, why)) {
+      return false;
+    }
+    for (size_t i = 0; i < markers.objects.size(); ++i) {
+      measurements.push_back(
+          markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
+    }
+  }
   const std::vector<ViewMeasurement> one_view = viewMeasurements(
       objects, lr, rr, lv, rv, class_names_, config_.stereo.pixel_sigma_px, tracker_.tracks(), t_s);
   tracker_.update(t_s, measurements);
@@ -63,7 +99,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   last_views_ = {lv, rv};
   processing_ms_.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, lv, out);
+  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, lv, out);
   setCounters(target_id, out->pose.target_index);
   return true;
 }
@@ -71,8 +107,8 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
 void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
                                   const std::vector<Region>& lr, const std::vector<Region>& rr,
                                   const std::vector<StereoObject>& objects,
-                                  const std::vector<BoxYaw>& yaws, const CameraView& lv,
-                                  FrameOutputs* out) const {
+                                  const std::vector<BoxYaw>& yaws, const MarkerScan& markers,
+                                  const CameraView& lv, FrameOutputs* out) const {
   ptzstereo::object_detections_t& det = out->detections;
   det = {};
   det.utime = m.utime;
@@ -97,6 +133,30 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
         toMessage(o, class_names_[static_cast<size_t>(o.class_index)],
                   objectRadiusM(lr[static_cast<size_t>(o.left)], o.position_head_m, lv), yaws[i]));
   }
+  // Tagged objects after the colour ones (their object_index in the tracker says so); a tag's
+  // detection is matched to the other view's of the same id.
+  const size_t first_left = det.left.size(), first_right = det.right.size();
+  for (int s = 0; s < 2; ++s) {
+    auto& list = s == 0 ? det.left : det.right;
+    for (const MarkerSighting& t : markers.sightings[s]) {
+      list.push_back(
+          toMessage(t, markers_.classes()[static_cast<size_t>(t.class_index)].objectName(t.id)));
+    }
+  }
+  for (size_t i = 0; i < markers.sightings[0].size(); ++i) {
+    for (size_t j = 0; j < markers.sightings[1].size(); ++j) {
+      const MarkerSighting &a = markers.sightings[0][i], &b = markers.sightings[1][j];
+      if (a.class_index == b.class_index && a.id == b.id) {
+        det.left[first_left + i].match_index = static_cast<int32_t>(first_right + j);
+        det.right[first_right + j].match_index = static_cast<int32_t>(first_left + i);
+      }
+    }
+  }
+  for (const MarkerObject& o : markers.objects) {
+    const int l = o.sightings[0].empty() ? -1 : static_cast<int>(first_left) + o.sightings[0][0];
+    const int r = o.sightings[1].empty() ? -1 : static_cast<int>(first_right) + o.sightings[1][0];
+    pose.objects.push_back(toMessage(o, l, r));
+  }
   // The target's object: the measurement that updated the locked track in this frame; or, when
   // one view alone did, the track as it now is (the other view's index -1).
   if (const Track* target = tracker_.find(target_id)) {
@@ -117,7 +177,7 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
   tracks.target_id = target_id;
   tracks.target_reason = selector_.reason();
   for (const auto& t : tracker_.tracks()) {
-    tracks.tracks.push_back(toMessage(t, t_s, tracker_.params().yaw_psd_rad2_s));
+    tracks.tracks.push_back(toMessage(t, t_s, tracker_.params()));
   }
   tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
 }
@@ -130,6 +190,9 @@ void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
   counters_["track_yaws_accepted"] = tracker_.yawsAccepted();
   counters_["track_yaws_refused"] = tracker_.yawsRefused();
   counters_["tracks_refused"] = tracker_.tracksRefused();
+  counters_["track_rotations_accepted"] = tracker_.rotationsAccepted();
+  counters_["track_rotations_refused"] = tracker_.rotationsRefused();
+  for (const auto& [name, n] : markers_.counts()) counters_[name] = n;
   counters_["target_id"] = target_id;
   for (const auto& [reason, n] : tracker_.untrustedCounts()) counters_["untrusted_" + reason] = n;
   for (const auto& [name, n] : windows_.counts()) counters_[name] = n;

@@ -1,7 +1,9 @@
 // ptz-detect's work on a frame (no LCM): the images decoded as far as they are scanned (windows
 // around the tracks' predicted images, a band or the whole image), both images' regions, their
 // stereo pairs triangulated, the boxes' yaws, the tracker's update and the target's choice, as the
-// three messages ptz-detect publishes; and TARGET_SELECT requests. The main checks what comes in
+// three messages ptz-detect publishes; and TARGET_SELECT requests. Tagged objects (fiducial
+// markers, marker_scan.hpp) join the colour objects: their detections, objects and tracks follow
+// the colour ones' in each message. The main checks what comes in
 // (FrameIntake, FreshnessGate), publishes what comes out and copies counters() into its status.
 #pragma once
 
@@ -79,7 +81,7 @@ class DetectPipeline {
   void makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
                     const std::vector<Region>& lr, const std::vector<Region>& rr,
                     const std::vector<StereoObject>& objects, const std::vector<BoxYaw>& yaws,
-                    const CameraView& lv, FrameOutputs* out) const;
+                    const MarkerScan& markers, const CameraView& lv, FrameOutputs* out) const;
   void setCounters(int64_t target_id, int64_t target_index);
 
   DetectConfig config_;
@@ -89,6 +91,7 @@ class DetectPipeline {
   std::vector<std::string> class_names_;  // the detector's, by class index
   TargetSelector selector_;
   WindowScanner windows_;
+  MarkerScanner markers_;
   std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
   std::vector<double> processing_ms_;
   std::vector<double> orientation_us_;

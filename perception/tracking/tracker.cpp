@@ -126,8 +126,24 @@ void Tracker::correctYaw(Track* t, const TrackMeasurement& m) {
   ++yaws_accepted_;
 }
 
+void Tracker::correctRotation(Track* t, const TrackMeasurement& m) {
+  if (!m.has_rotation) return;
+  switch (
+      updateRotation(&t->rotation, t->t_s, m.rotation, m.rotation_covariance_rad2, p_.rotation)) {
+    case RotationUpdate::kStarted:
+    case RotationUpdate::kAccepted:
+      ++rotations_accepted_;
+      break;
+    case RotationUpdate::kRefused:
+    case RotationUpdate::kInvalid:
+      ++rotations_refused_;
+      break;
+  }
+}
+
 void Tracker::correct(Track* t, const TrackMeasurement& m) {
   correctYaw(t, m);
+  correctRotation(t, m);
   const Eigen::Matrix3d S = t->positionCovariance() + measurementCovariance(m);
   const Eigen::Matrix<double, 9, 3> PHt = t->P.leftCols<3>();
   const Eigen::Matrix<double, 9, 3> K = PHt * S.inverse();
@@ -150,6 +166,7 @@ void Tracker::restart(Track* t, double t_s, const TrackMeasurement& m) {
   t->object_index = m.object_index;
   // The same object: its yaw goes on (a wrong one is refused and then restarted by the gate).
   correctYaw(t, m);
+  correctRotation(t, m);
 }
 
 Track* Tracker::recoverable(double t_s, const TrackMeasurement& m, const std::vector<bool>& taken) {
@@ -198,6 +215,7 @@ void Tracker::start(double t_s, const TrackMeasurement& m) {
     if (d <= kBesideRadii * radius_m) t.born_beside_ids.push_back(other.id);
   }
   correctYaw(&t, m);
+  correctRotation(&t, m);
   tracks_.push_back(t);
 }
 

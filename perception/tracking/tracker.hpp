@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
+#include "perception/tracking/rotation.hpp"
 
 namespace ptz::perception {
 
@@ -57,6 +58,8 @@ struct TrackerParams {
   double yaw_psd_rad2_s = 0.05;
   double yaw_gate_chi2 = 10.83;
   int yaw_reset_misses = 3;
+  // Full orientations (tagged objects): their random walk, gate and reset.
+  RotationFilterParams rotation;
   double view_gate_chi2 = 13.82;  // one-view updates: chi-square, 2 dof, p = 0.001
   // One view fixes two directions; the third (depth) comes from the track, so only this soon after
   // its last 3D measurement: a long-coasted depth has drifted (s).
@@ -79,6 +82,10 @@ struct TrackMeasurement {
   double yaw_rad = 0;
   double yaw_var_rad2 = 0;
   double yaw_period_rad = M_PI / 2;
+  // A tagged object's whole orientation (head <- object) and its rotation-vector covariance.
+  bool has_rotation = false;
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  Eigen::Matrix3d rotation_covariance_rad2 = Eigen::Matrix3d::Zero();
 };
 
 // A region of one camera that no stereo pair used: the object is hidden in the other view (behind
@@ -123,6 +130,7 @@ struct Track {
   double yaw_t_s = 0;
   double yaw_period_rad = M_PI / 2;
   int yaw_misses = 0;
+  RotationEstimate rotation;  // a tagged object's (rotation.ok false: none)
 
   Eigen::Vector3d position() const { return x.head<3>(); }
   Eigen::Vector3d velocity() const { return x.segment<3>(3); }
@@ -164,6 +172,9 @@ class Tracker {
   // Measured yaws the yaw filter took and refused (its gate), since the start.
   int64_t yawsAccepted() const { return yaws_accepted_; }
   int64_t yawsRefused() const { return yaws_refused_; }
+  // Measured full orientations the filter took and refused, since the start.
+  int64_t rotationsAccepted() const { return rotations_accepted_; }
+  int64_t rotationsRefused() const { return rotations_refused_; }
   const TrackerParams& params() const { return p_; }
 
  private:
@@ -175,6 +186,8 @@ class Tracker {
   void correct(Track* t, const TrackMeasurement& m);
   // The yaw filter's update by m's yaw (at t's time), with the wrap of its period.
   void correctYaw(Track* t, const TrackMeasurement& m);
+  // The full orientation's update by m's (tagged objects).
+  void correctRotation(Track* t, const TrackMeasurement& m);
   Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
   void start(double t_s, const TrackMeasurement& m);
   // The non-tentative track of m's class not taken this frame whose prediction is nearest m
@@ -193,6 +206,8 @@ class Tracker {
   int64_t tracks_refused_ = 0;
   int64_t yaws_accepted_ = 0;
   int64_t yaws_refused_ = 0;
+  int64_t rotations_accepted_ = 0;
+  int64_t rotations_refused_ = 0;
   int64_t view_updates_ = 0;
 };
 

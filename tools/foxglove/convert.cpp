@@ -433,13 +433,34 @@ struct Converter::Impl {
         {"pose", pose}, {"size", vec3(Eigen::Vector3d::Constant(size))}, {"color", colour}};
     const json label_pose = {{"position", vec3(position - Eigen::Vector3d(0, size, 0))},
                              {"orientation", quat(Eigen::Quaterniond::Identity())}};
+    // An object with an orientation shows its axes: x red, y green, z blue (an arrow points along
+    // its pose's x).
+    json arrows = json::array();
+    if (orientation) {
+      const double length = std::max(size, 0.1);
+      const Eigen::Quaterniond to_axis[3] = {
+          Eigen::Quaterniond::Identity(),
+          Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ())),
+          Eigen::Quaterniond(Eigen::AngleAxisd(-M_PI / 2, Eigen::Vector3d::UnitY()))};
+      const json colours[3] = {rgba(1, 0, 0, 1), rgba(0, 1, 0, 1), rgba(0, 0, 1, 1)};
+      for (int k = 0; k < 3; ++k) {
+        arrows.push_back(
+            {{"pose",
+              {{"position", vec3(position)}, {"orientation", quat(*orientation * to_axis[k])}}},
+             {"shaft_length", 0.8 * length},
+             {"shaft_diameter", 0.05 * length},
+             {"head_length", 0.2 * length},
+             {"head_diameter", 0.1 * length},
+             {"color", colours[k]}});
+      }
+    }
     return {{"timestamp", stamp(utime)},
             {"frame_id", "head"},
             {"id", id},
             {"lifetime", {{"sec", 0}, {"nsec", 0}}},
             {"frame_locked", false},
             {"metadata", json::array()},
-            {"arrows", json::array()},
+            {"arrows", arrows},
             {"cubes", orientation ? json::array({shape}) : json::array()},
             {"spheres", orientation ? json::array() : json::array({shape})},
             {"cylinders", json::array()},
@@ -497,8 +518,9 @@ struct Converter::Impl {
       const std::string name = printable(o.name, 40);
       entities.push_back(entity("truth-" + name, m.utime,
                                 Eigen::Vector3d(o.position_m[0], o.position_m[1], o.position_m[2]),
-                                o.radius_m, o.shape == "box" ? &q : nullptr, rgba(0.2, 1, 0.2, 0.3),
-                                name));
+                                o.radius_m,
+                                o.shape == "box" || o.shape == "tagged_box" ? &q : nullptr,
+                                rgba(0.2, 1, 0.2, 0.3), name));
     }
     return sceneUpdate(m.utime, entities);
   }

@@ -71,18 +71,18 @@ double rms(const std::vector<double>& v) {
   return std::sqrt(s / v.size());
 }
 
-// The angle of the rotation between two unit quaternions (w, x, y, z), of a box symmetric under
-// turns by 90 degrees about its own y axis: the smallest over those turns, degrees. NaN when
-// either is not a finite, non-zero quaternion.
-double boxOrientationErrorDeg(const std::array<double, 4>& estimate,
-                              const std::array<double, 4>& truth) {
+// The angle of the rotation between two unit quaternions (w, x, y, z), degrees, the truth's taken
+// up to `quarter_turns` turns of pi/2 about its own y axis (4: an upright box symmetric under
+// them; 1: a tagged box, all of whose orientation is seen); NaN for a non-finite or zero one.
+double orientationErrorDeg(const std::array<double, 4>& estimate,
+                           const std::array<double, 4>& truth, int quarter_turns) {
   const Eigen::Quaterniond e(estimate[0], estimate[1], estimate[2], estimate[3]);
   const Eigen::Quaterniond t(truth[0], truth[1], truth[2], truth[3]);
   if (!e.coeffs().allFinite() || !t.coeffs().allFinite() || e.norm() < 1e-9 || t.norm() < 1e-9) {
     return NAN;
   }
   double best = INFINITY;
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < quarter_turns; ++k) {
     const Eigen::Quaterniond sym(Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitY()));
     const Eigen::Quaterniond d = (t.normalized() * sym).conjugate() * e.normalized();
     best = std::min(best, 2 * std::atan2(d.vec().norm(), std::abs(d.w())));
@@ -137,7 +137,7 @@ void RunMetrics::onTruth(const ptzstereo::sim_truth_t& m) {
     t.name = intern(o.name);
     t.class_name = intern(o.class_name);
     t.position_m = {o.position_m[0], o.position_m[1], o.position_m[2]};
-    t.box = o.shape == "box";
+    t.orientation_symmetry = o.shape == "box" ? 4 : o.shape == "tagged_box" ? 1 : 0;
     for (int i = 0; i < 4; ++i) t.orientation_wxyz[static_cast<size_t>(i)] = o.orientation_wxyz[i];
     const Eigen::Vector3d p(o.position_m[0], o.position_m[1], o.position_m[2]);
     t.in_front = t.inside = t.fully_visible = true;
@@ -269,8 +269,9 @@ RunMetrics::Scored RunMetrics::score() const {
         if (range_m > 0 && lock_utime && secondsBetween(*lock_utime, utime) >= settle_s_) {
           s.settled_error_pct.push_back(100 * err_m / range_m);
         }
-        if (o->box && p->second.has_orientation) {
-          const double e = boxOrientationErrorDeg(p->second.orientation_wxyz, o->orientation_wxyz);
+        if (o->orientation_symmetry > 0 && p->second.has_orientation) {
+          const double e = orientationErrorDeg(p->second.orientation_wxyz, o->orientation_wxyz,
+                                               o->orientation_symmetry);
           if (std::isfinite(e)) s.orientation_error_deg.push_back(e);
         }
         if (tracked >= 0 && o->name != tracked) ++s.switches;

@@ -68,8 +68,9 @@ struct RunSummary {
   int64_t centering_samples = 0;
   int64_t position_samples = 0;
   // OBJECT_POSE target's orientation vs the tracked true object's (SIM_TRUTH), a box's taken
-  // modulo its symmetry (turns by 90 degrees about its vertical axis: a square footprint): the
-  // angle of the rotation between them, over the poses that have one and a box as the truth.
+  // modulo its symmetry (turns by 90 degrees about its vertical axis: a square footprint; a tagged
+  // box's none): the angle of the rotation between them, over the poses that have one and a box as
+  // the truth.
   double orientation_error_rms_deg = NAN;
   int64_t orientation_samples = 0;
 
@@ -116,7 +117,9 @@ class RunMetrics {
     bool inside = false;         // of both images
     bool fully_visible = false;  // none of it hidden, all of it inside both images
     std::array<double, 4> offset_px{};
-    bool box = false;  // its shape: a box has an orientation
+    // Quarter turns about y its orientation is taken up to: 4 a box, 1 a tagged box (its tags
+    // tell every face apart), 0 none (a sphere).
+    int orientation_symmetry = 0;
     std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   };
   struct Pose {

@@ -2,6 +2,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -91,8 +93,31 @@ const char* trackStateName(int8_t state) {
   }
 }
 
+// An object's axes (x red, y green, z blue, as RViz and Foxglove draw them), length_m long from
+// its centre p: its orientation seen. Nothing for a quaternion that is not a finite unit one.
+void drawAxes(cv::Mat* image, const CameraView& view, const Eigen::Vector3d& p, const double* wxyz,
+              double length_m) {
+  const Eigen::Quaterniond q(wxyz[0], wxyz[1], wxyz[2], wxyz[3]);
+  if (!q.coeffs().allFinite() || std::abs(q.norm() - 1) > 1e-3) return;
+  const Eigen::Matrix3d R = q.normalized().toRotationMatrix();
+  const Eigen::Vector2d o = view.project(p);
+  const cv::Scalar colours[3] = {cv::Scalar(0, 0, 255), cv::Scalar(0, 255, 0),
+                                 cv::Scalar(255, 0, 0)};
+  auto inside = [](const Eigen::Vector2d& x) {
+    return x.allFinite() && std::abs(x.x()) < 1e5 && std::abs(x.y()) < 1e5;
+  };
+  if (!inside(o)) return;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector2d e = view.project(p + length_m * R.col(k));
+    if (!inside(e)) continue;
+    cv::arrowedLine(*image, cv::Point2d(o.x(), o.y()), cv::Point2d(e.x(), e.y()), colours[k], 2,
+                    cv::LINE_AA, 0, 0.15);
+  }
+}
+
 // One track through one camera: a circle of its apparent radius (fx r / range, as ptz-detect
-// measures it), an x at its centre, "#id class" below. Not drawn where the camera cannot see it.
+// measures it), an x at its centre, its axes when it has an orientation, "#id class" below. Not
+// drawn where the camera cannot see it.
 void drawTrack(cv::Mat* image, const CameraView& view, const ptzstereo::object_track_t& t,
                bool is_target) {
   const Eigen::Vector3d p(t.position_m[0], t.position_m[1], t.position_m[2]);
@@ -117,6 +142,7 @@ void drawTrack(cv::Mat* image, const CameraView& view, const ptzstereo::object_t
       cv::circle(*image, c, r, colour, is_target ? 3 : 2, cv::LINE_AA);
     }
   }
+  if (t.has_orientation) drawAxes(image, view, p, t.orientation_wxyz, std::max(t.radius_m, 0.05));
   // Not anti-aliased: the centre pixel is exactly the colour.
   cv::drawMarker(*image, c, colour, cv::MARKER_TILTED_CROSS, 10, 1, cv::LINE_8);
   if (c.x < 0 || c.y < 0 || c.x >= image->cols || c.y >= image->rows) return;

@@ -1,7 +1,8 @@
 // ptz-view's drawing (no LCM, no window): both camera images side by side with the detections,
-// the tracks (id, class, state; the target), the image centre cross, the target's epipolar line in
-// the other image, and a text panel with each camera's PTZ and setpoint, the target's 3D position
-// and range, the controller's state, the loop delay and rates. And what a click on it asks for.
+// the tracks (id, class, state, axes of those with an orientation; the target), the image centre
+// cross, the target's epipolar line in the other image, and a text panel with each camera's PTZ and
+// setpoint, the target's 3D position and range, the controller's state, the loop delay and rates.
+// And what a click on it asks for.
 #pragma once
 
 #include <opencv2/core.hpp>

@@ -14,6 +14,7 @@
 #include "perception/detect/detect_pipeline.hpp"
 #include "sim/sim_messages.hpp"
 #include "sim/simulator.hpp"
+#include "support/detect_pipeline.hpp"
 #include "support/detect_scene.hpp"
 
 namespace perception = ptz::perception;
@@ -52,26 +53,12 @@ class Pipeline : public ::testing::Test {
   // default rig, and `set` (name, value) as flags would set them.
   perception::DetectPipeline make(
       const std::vector<std::pair<std::string, std::string>>& set = {}) {
-    ptz::Params p("ptz-detect", "test");
-    ptz::declareRigParams(p);
-    perception::declareDetectParams(p);
-    p.parseConfigFile(PTZ_SOURCE_DIR "/config/detect_default.yaml");
-    for (const auto& [name, value] : set) p.set(name, value);
-    p.checkOrders();
-    return perception::DetectPipeline(perception::DetectConfig::fromParams(p),
-                                      ptz::rigFromParams(p));
+    return ptz::test::makeDetectPipeline(set);
   }
 
   // The rendered frame again, as frame `seq` captured at 30 Hz (the objects stand still).
   perception::FrameOutputs feed(perception::DetectPipeline* pipeline) {
-    ptzstereo::stereo_frame_t m = frame_;
-    m.seq = seq_;
-    m.utime = 1'700'000'000'000'000 + seq_ * 33'333;
-    ++seq_;
-    perception::FrameOutputs out;
-    std::string why;
-    EXPECT_TRUE(pipeline->process(m, &out, &why)) << why;
-    return out;
+    return ptz::test::feedFrame(pipeline, frame_, &seq_);
   }
 
   ptzstereo::stereo_frame_t frame_;

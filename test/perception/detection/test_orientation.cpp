@@ -14,6 +14,7 @@
 #include "perception/tracking/yaw.hpp"
 #include "sim/simulator.hpp"
 #include "support/detect_scene.hpp"
+#include "support/render_aimed.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;
@@ -29,12 +30,6 @@ int classIndex(const perception::DetectorParams& p, const std::string& name) {
     if (p.classes[i].name == name) return static_cast<int>(i);
   }
   return -1;
-}
-
-cv::Mat jpeg(const cv::Mat& bgr) {
-  std::vector<uchar> bytes;
-  cv::imencode(".jpg", bgr, bytes, {cv::IMWRITE_JPEG_QUALITY, 90});
-  return cv::imdecode(bytes, cv::IMREAD_COLOR);
 }
 
 struct Case {
@@ -65,25 +60,9 @@ Result run(const Case& c, const perception::Detector& detector) {
   box.color_bgr = {40, 170, 40};
   box.trajectory.centre_m = c.centre;
   scene.objects = {box};
-  auto plant = ptz::defaultPlantParams();
-  for (auto& a : plant.axis) {
-    a.time_constant_s = 1e-4;
-    a.max_rate_per_s = 1e6;
-  }
-  sim::Simulator s(rig, scene, plant, 2.0, 3);
-  // Each camera aimed at the box from where it stands.
-  auto aim = [&](Side side) {
-    const Eigen::Vector3d d = c.centre - rig.view(side, {}).position_head_m;
-    return PtzPose{std::atan2(d.x(), d.z()), std::atan2(-d.y(), std::hypot(d.x(), d.z())), c.zoom};
-  };
-  const PtzPose lp = aim(Side::kLeft), rp = aim(Side::kRight);
-  int clamped = 0, rejected = 0;
-  s.command(0, lp, rp, &clamped, &rejected);
-  s.advanceTo(0.05);
-  const sim::SimFrame f = s.capture();
-  const cv::Mat left = jpeg(f.left), right = jpeg(f.right);
-  const ptz::CameraView lv = rig.view(Side::kLeft, f.left_pose);
-  const ptz::CameraView rv = rig.view(Side::kRight, f.right_pose);
+  const ptz::test::AimedFrame f = ptz::test::renderAimed(rig, scene, c.centre, c.zoom);
+  const cv::Mat &left = f.left, &right = f.right;
+  const ptz::CameraView &lv = f.left_view, &rv = f.right_view;
   const auto lr = detector.detect(left), rr = detector.detect(right);
   const auto objects = perception::associate(lr, rr, lv, rv, {});
   Result out;

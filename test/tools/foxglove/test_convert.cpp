@@ -252,6 +252,21 @@ TEST(Convert, TracksAreDrawnWithTheTargetMarkedAndWhatIsNotANumberLeftOut) {
   EXPECT_EQ(target["texts"][0]["text"], "4 red_ball (target)");
   EXPECT_GT(target["spheres"][0]["color"]["r"].get<double>(), 0.9);
   EXPECT_EQ(scene["entities"][1]["cubes"].size(), 1u);  // an object with an orientation
+  // ... and its axes: x, y, z as arrows along their pose's x, from its centre.
+  const json& arrows = scene["entities"][1]["arrows"];
+  ASSERT_EQ(arrows.size(), 3u);
+  EXPECT_TRUE(target["arrows"].empty());
+  const Eigen::Vector3d along[3] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+                                    Eigen::Vector3d::UnitZ()};
+  for (size_t k = 0; k < 3; ++k) {
+    const json& q = arrows[k]["pose"]["orientation"];
+    const Eigen::Quaterniond qe(q["w"].get<double>(), q["x"].get<double>(), q["y"].get<double>(),
+                                q["z"].get<double>());
+    EXPECT_LT((qe * Eigen::Vector3d::UnitX() - along[k]).norm(), 1e-9) << k;
+    EXPECT_DOUBLE_EQ(arrows[k]["pose"]["position"]["z"].get<double>(), 3.0);
+  }
+  EXPECT_GT(arrows[0]["color"]["r"].get<double>(), 0.9);
+  EXPECT_GT(arrows[2]["color"]["b"].get<double>(), 0.9);
   // The raw message keeps the track that is not a number, as null.
   const json& raw = out.by_topic.at("/object_tracks")[0];
   ASSERT_EQ(raw["tracks"].size(), 3u);

@@ -397,6 +397,28 @@ TEST(RunMetrics, ABoxsOrientationErrorIsTheAngleModuloItsQuarterTurns) {
   EXPECT_NE(ball.summary().toJson().find("\"orientation_error_rms_deg\": null"), std::string::npos);
 }
 
+// A tagged box tells all its faces apart: a quarter turn off is 90 degrees, not 0.
+TEST(RunMetrics, ATaggedBoxsOrientationErrorIsTheWholeAngle) {
+  RunMetrics m("tool", 0.0);
+  const double deg = M_PI / 180;
+  const double errors_deg[2] = {90, 2};
+  for (int64_t seq = 0; seq < 2; ++seq) {
+    ptzstereo::sim_truth_t t = syn::truth(seq, {{"tool", "tool", {0.1, 0.2, 2}}});
+    t.objects[0].shape = "tagged_box";
+    t.objects[0].orientation_wxyz[0] = 1;
+    m.onTruth(t);
+    ptzstereo::object_pose_t p = syn::pose(seq, "tool", {0.1, 0.2, 2});
+    auto& o = p.objects[1];
+    o.has_orientation = true;
+    // About its vertical axis: a plain box's quarter turn would be no error.
+    o.orientation_wxyz[0] = std::cos(errors_deg[seq] * deg / 2);
+    o.orientation_wxyz[2] = std::sin(errors_deg[seq] * deg / 2);
+    m.onPose(p);
+  }
+  EXPECT_EQ(m.summary().orientation_samples, 2);
+  EXPECT_NEAR(m.summary().orientation_error_rms_deg, std::sqrt((90.0 * 90 + 2 * 2) / 2), 1e-9);
+}
+
 TEST(RunMetrics, FramesTheSimulatorCouldNotSendCountAsLost) {
   RunMetrics m("red_ball", 0.0);
   for (int64_t seq = 0; seq < 20; ++seq) {
