@@ -1,7 +1,7 @@
 // Writes the seed corpus of every fuzz target (fuzz/corpus/<target>/): real encoded messages,
 // JPEGs encoded by OpenCV, the VISCA and Pelco-D bytes the project's own encoders and camera
 // emulators produce, the ONVIF requests ptz-sim's cameras take, the project's config, model and
-// rig files, and small LCM logs. Deterministic;
+// rig files, small LCM logs, masks of discs and images with fiducial tags. Deterministic;
 // `scripts/fuzz --make-corpus` runs it. Usage: ptz_fuzz_corpus SOURCE_DIR CORPUS_DIR
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -9,6 +9,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdio>
@@ -723,6 +724,81 @@ void discMasks() {
   write("fuzz_disc_split", "square", mask(40, 40, {}, true));
 }
 
+// fuzz_markers: images with tags drawn by the target (its 18-byte header, fuzz_markers.cpp), on a
+// picture's pixels of exactly the size it cuts both views from; one of noise alone. The tag's size
+// in metres is the one its disparity and pixels give at zoom 1 in the middle of the default rig's
+// frames (fx 500 px, baseline 0.3 m, 8.5 px of disparity at infinity, the right view 2 rows
+// higher), so that its poses can be accepted.
+void markerImages() {
+  struct Seed {
+    const char* name;
+    int width, height;
+    int choice;    // 0 libapriltag apriltag_36h11, 1 ArUco aruco_4x4_50, 2 ArUco apriltag_36h11
+    int decimate;  // 0: 1, 1: 1.5, 2: 2
+    bool second, same_id, bilinear;
+    int id, side;
+    double x, y, turn_deg;  // the tag's centre as a share of the image (may be beyond), its turn
+    int dx, dy;             // the second tag's centre from the first's
+    int disparity;
+    int drop;         // rows the right view is cut lower
+    int noise_bytes;  // > 0: that many bytes of noise for pixels, and no tag
+  };
+  const Seed seeds[] = {
+      {"apriltag_square", 96, 72, 0, 2, false, false, false, 0, 48, 0.65, 0.5, 0, 0, 0, 30, 2, 0},
+      {"apriltag_turned_bilinear", 120, 100, 0, 1, false, false, true, 42, 56, 0.45, 0.55, 30, 0, 0,
+       24, 2, 0},
+      {"apriltag_cut_by_the_edge", 80, 64, 0, 0, false, false, false, 586, 40, 0.9, 0.4, 0, 0, 0,
+       20, 1, 0},
+      {"aruco_4x4", 96, 64, 1, 0, false, false, false, 7, 40, 0.6, 0.5, 0, 0, 0, 24, 2, 0},
+      {"aruco_4x4_twice", 128, 64, 1, 0, true, true, false, 3, 36, 0.3, 0.5, 10, 60, 0, 20, 2, 0},
+      {"aruco_apriltag_bundle", 160, 80, 2, 0, true, false, false, 5, 56, 0.3, 0.5, 0, 64, 0, 24, 2,
+       0},
+      {"noise_no_tag", 160, 160, 0, 1, false, false, false, 0, 8, 0, 0, 0, 0, 0, -4, 0, 37},
+  };
+  for (const Seed& s : seeds) {
+    const int bits = s.choice == 1 ? 4 : 6;
+    const double square_px = s.side * (bits + 2.0) / (bits + 4.0);
+    const double range_m = 500.0 * 0.3 / std::max(1.0, s.disparity - 8.5);
+    const double size_m = square_px * range_m / 500.0;
+    const auto byte = [](double v) {
+      return static_cast<uint8_t>(std::clamp(v + 0.5, 0.0, 255.0));
+    };
+    Bytes b = {
+        static_cast<uint8_t>(s.width - 8),
+        static_cast<uint8_t>(s.height - 8),
+        static_cast<uint8_t>(s.choice | s.decimate << 2 | (s.noise_bytes ? 0 : 0x10) |
+                             (s.second ? 0x20 : 0) | (s.same_id ? 0x40 : 0) |
+                             (s.bilinear ? 0x80 : 0)),
+        static_cast<uint8_t>(s.id & 0xFF),
+        static_cast<uint8_t>(s.id >> 8),
+        static_cast<uint8_t>(s.side - 8),
+        byte((s.x * s.width + s.side / 2.0) * 255 / (s.width + s.side)),
+        byte((s.y * s.height + s.side / 2.0) * 255 / (s.height + s.side)),
+        byte(s.turn_deg * 256 / 360),
+        static_cast<uint8_t>(static_cast<int8_t>(s.dx)),
+        static_cast<uint8_t>(static_cast<int8_t>(s.dy)),
+        static_cast<uint8_t>((s.disparity + 8) | s.drop << 6),
+        static_cast<uint8_t>(s.width / 4),
+        static_cast<uint8_t>(s.height / 4),
+        static_cast<uint8_t>(s.width / 2),
+        static_cast<uint8_t>(s.height / 2),
+        byte((size_m - 0.02) / 0.004),
+        0,
+    };
+    if (s.noise_bytes > 0) {
+      uint32_t x = 12345;
+      for (int i = 0; i < s.noise_bytes; ++i) {
+        x = x * 1103515245u + 12345u;
+        b.push_back(static_cast<uint8_t>(x >> 16));
+      }
+    } else {
+      const cv::Mat g = picture(s.width + std::abs(s.disparity), s.height + s.drop, true);
+      for (int y = 0; y < g.rows; ++y) b.insert(b.end(), g.ptr<uchar>(y), g.ptr<uchar>(y) + g.cols);
+    }
+    write("fuzz_markers", s.name, b);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -742,5 +818,6 @@ int main(int argc, char** argv) {
   foxglove();
   onvif_requests();
   discMasks();
+  markerImages();
   return 0;
 }

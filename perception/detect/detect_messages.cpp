@@ -48,6 +48,32 @@ ptzstereo::detection_2d_t toMessage(const MarkerSighting& s, const std::string& 
   return d;
 }
 
+ptzstereo::detection_2d_t toMessage(const ClickedObject& o, int side) {
+  ptzstereo::detection_2d_t d{};
+  d.class_name = ClickedTracker::kClassName;
+  d.centroid_x_px = o.pixel[side].x;
+  d.centroid_y_px = o.pixel[side].y;
+  d.area_px2 = o.box[side].area();
+  d.bbox_x_px = o.box[side].x;
+  d.bbox_y_px = o.box[side].y;
+  d.bbox_width_px = o.box[side].width;
+  d.bbox_height_px = o.box[side].height;
+  d.match_index = -1;
+  return d;
+}
+
+ptzstereo::object_3d_t toMessage(const ClickedObject& o, int left_index, int right_index) {
+  ptzstereo::object_3d_t obj{};
+  obj.class_name = ClickedTracker::kClassName;
+  for (int r = 0; r < 3; ++r) obj.position_m[r] = o.position_m[r];
+  copyMatrix(o.covariance_m2, obj.covariance_m2);
+  obj.left_index = left_index;
+  obj.right_index = right_index;
+  obj.radius_m = o.radius_m;
+  obj.orientation_wxyz[0] = 1;
+  return obj;
+}
+
 ptzstereo::object_3d_t toMessage(const MarkerObject& o, int left_index, int right_index) {
   ptzstereo::object_3d_t obj{};
   obj.class_name = o.name;

@@ -129,6 +129,16 @@ void declareDetectParams(Params& p) {
       "tracks: a tagged object turns at an angular velocity whose changes are white noise of this "
       "power spectral density per axis",
       Range::above(0));
+  const ClickedParams k;
+  p.add("click_to_track", true,
+        "TARGET_SELECT by an image point on no track starts a model of what is under it (its "
+        "appearance, matched in the other view along the epipolar line) and follows it as class "
+        "clicked");
+  p.add("click_patch_px", k.patch_px, "px", "click to track: the patch's side around the click",
+        Range::between(8, 256));
+  p.add("click_min_score", k.min_score, "",
+        "click to track: a frame's match in each view needs this normalised correlation",
+        Range::between(0, 1));
   p.addSection(
       "markers",
       "list of {name, detector: apriltag|aruco, family (apriltag_36h11, aruco_4x4_50, ...), "
@@ -203,7 +213,8 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   }
   c.target_class = p.getString("target_class");
   const std::vector<std::string> names = markerObjectNames(c.markers);
-  if (std::find(names.begin(), names.end(), c.target_class) == names.end()) {
+  if (std::find(names.begin(), names.end(), c.target_class) == names.end() &&
+      c.target_class != ClickedTracker::kClassName) {
     checkTargetClass(p, c.detector);
   }
   c.marker_scan.bands = p.getInt("marker_bands");
@@ -214,6 +225,11 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.marker_scan.pose.min_range_m = p.getDouble("min_range_m");
   c.marker_scan.pose.max_range_m = p.getDouble("max_range_m");
   c.marker_scan.detector.max_hamming = p.getInt("marker_max_hamming");
+  c.click_to_track = p.getBool("click_to_track");
+  c.clicked.patch_px = p.getInt("click_patch_px");
+  c.clicked.min_score = p.getDouble("click_min_score");
+  c.clicked.min_range_m = c.stereo.min_range_m;
+  c.clicked.max_range_m = c.stereo.max_range_m;
   c.stereo.max_epipolar_px = p.getDouble("max_epipolar_px");
   c.stereo.max_area_ratio = p.getDouble("max_area_ratio");
   c.stereo.pixel_sigma_px = p.getDouble("pixel_sigma_px");

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/config.hpp"
+#include "perception/appearance/clicked.hpp"
 #include "perception/detection/detector.hpp"
 #include "perception/detection/orientation.hpp"
 #include "perception/detection/stereo.hpp"
@@ -41,6 +42,9 @@ struct DetectConfig {
   // Fiducial markers (the config file's section `markers`; none: not scanned for).
   std::vector<MarkerClass> markers;
   MarkerScanParams marker_scan;
+  // A point on no track starts a model of what is under it (appearance/clicked.hpp).
+  bool click_to_track = true;
+  ClickedParams clicked;
 
   // From parsed parameters. The classes come from the config file, which is therefore required;
   // throws ConfigError naming the file, flag or field (no config file, a class's field, an even

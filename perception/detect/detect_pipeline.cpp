@@ -17,6 +17,7 @@ std::vector<std::string> classNames(const DetectorParams& dp,
   std::vector<std::string> names;
   for (const auto& c : dp.classes) names.push_back(c.name);
   for (const auto& n : markerObjectNames(markers)) names.push_back(n);
+  names.push_back(ClickedTracker::kClassName);
   return names;
 }
 
@@ -43,10 +44,12 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
       class_names_(classNames(detector_.params(), config_.markers)),
       selector_(config_.target_class, class_names_, config_.pick_radius_px),
       windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()),
-      markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}) {}
+      markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}),
+      clicked_(config_.clicked) {}
 
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
                              std::string* why) {
+  out->click_note.clear();
   const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
   const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
   const double t_s = m.utime * 1e-6;
@@ -73,16 +76,16 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     tm.yaw_var_rad2 = y.variance_rad2;
   }
   // Tags: windows around their tracks and a band, from the pixels decoded for the colours.
+  const CropPixels crops[2] = {[&](const cv::Rect& r, cv::Mat* px, std::string* w) {
+                                 bool reused = false;
+                                 return left_pixels.crop(r, px, &reused, w);
+                               },
+                               [&](const cv::Rect& r, cv::Mat* px, std::string* w) {
+                                 bool reused = false;
+                                 return right_pixels.crop(r, px, &reused, w);
+                               }};
   MarkerScan markers;
   if (markers_.enabled()) {
-    const CropPixels crops[2] = {[&](const cv::Rect& r, cv::Mat* px, std::string* w) {
-                                   bool reused = false;
-                                   return left_pixels.crop(r, px, &reused, w);
-                                 },
-                                 [&](const cv::Rect& r, cv::Mat* px, std::string* w) {
-                                   bool reused = false;
-                                   return right_pixels.crop(r, px, &reused, w);
-                                 }};
     if (!markers_.scan(tracker_.tracks(), t_s, lv, rv, config_.windows, crops, &markers, why)) {
       return false;
     }
@@ -90,6 +93,16 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
       measurements.push_back(
           markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
     }
+  }
+  const std::optional<ClickedObject> clicked = clickedObject(t_s, crops, lv, rv, out);
+  if (clicked) {
+    TrackMeasurement cm;
+    cm.class_name = ClickedTracker::kClassName;
+    cm.position_m = clicked->position_m;
+    cm.covariance_m2 = clicked->covariance_m2;
+    cm.radius_m = clicked->radius_m;
+    cm.object_index = static_cast<int>(objects.size() + markers.objects.size());
+    measurements.push_back(cm);
   }
   const std::vector<ViewMeasurement> one_view = viewMeasurements(
       objects, lr, rr, lv, rv, class_names_, config_.stereo.pixel_sigma_px, tracker_.tracks(), t_s);
@@ -99,7 +112,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   last_views_ = {lv, rv};
   processing_ms_.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, lv, out);
+  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, clicked, lv, out);
   setCounters(target_id, out->pose.target_index);
   return true;
 }
@@ -108,15 +121,14 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
                                   const std::vector<Region>& lr, const std::vector<Region>& rr,
                                   const std::vector<StereoObject>& objects,
                                   const std::vector<BoxYaw>& yaws, const MarkerScan& markers,
-                                  const CameraView& lv, FrameOutputs* out) const {
+                                  const std::optional<ClickedObject>& clicked, const CameraView& lv,
+                                  FrameOutputs* out) const {
   ptzstereo::object_detections_t& det = out->detections;
   det = {};
   det.utime = m.utime;
   det.frame_seq = m.seq;
   for (const auto& r : lr) det.left.push_back(toMessage(r, detector_.params()));
   for (const auto& r : rr) det.right.push_back(toMessage(r, detector_.params()));
-  det.num_left = static_cast<int32_t>(det.left.size());
-  det.num_right = static_cast<int32_t>(det.right.size());
 
   ptzstereo::object_pose_t& pose = out->pose;
   pose = {};
@@ -152,11 +164,23 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
       }
     }
   }
+  // The clicked object: its patch in each view, matched, after the tags.
+  const int clicked_left = clicked ? static_cast<int>(det.left.size()) : -1;
+  const int clicked_right = clicked ? static_cast<int>(det.right.size()) : -1;
+  if (clicked) {
+    det.left.push_back(toMessage(*clicked, 0));
+    det.right.push_back(toMessage(*clicked, 1));
+    det.left.back().match_index = clicked_right;
+    det.right.back().match_index = clicked_left;
+  }
+  det.num_left = static_cast<int32_t>(det.left.size());
+  det.num_right = static_cast<int32_t>(det.right.size());
   for (const MarkerObject& o : markers.objects) {
     const int l = o.sightings[0].empty() ? -1 : static_cast<int>(first_left) + o.sightings[0][0];
     const int r = o.sightings[1].empty() ? -1 : static_cast<int>(first_right) + o.sightings[1][0];
     pose.objects.push_back(toMessage(o, l, r));
   }
+  if (clicked) pose.objects.push_back(toMessage(*clicked, clicked_left, clicked_right));
   // The target's object: the measurement that updated the locked track in this frame; or, when
   // one view alone did, the track as it now is (the other view's index -1).
   if (const Track* target = tracker_.find(target_id)) {
@@ -271,6 +295,46 @@ std::vector<BoxYaw> DetectPipeline::estimateYaws(const ptzstereo::stereo_frame_t
   return yaws;
 }
 
+std::optional<ClickedObject> DetectPipeline::clickedObject(double t_s, const CropPixels crops[2],
+                                                           const CameraView& lv,
+                                                           const CameraView& rv,
+                                                           FrameOutputs* out) {
+  std::string why;
+  if (pending_click_) {
+    const auto [side, pixel] = *pending_click_;
+    pending_click_.reset();
+    ClickedObject first;
+    if (!clicked_.start(side, pixel, crops, lv, rv, &first, &why)) {
+      ++counters_["click_models_refused"];
+      out->click_note = "no model of what is under the point: " + why;
+      return std::nullopt;
+    }
+    ++counters_["click_models_started"];
+    clicked_seen_s_ = t_s;
+    out->click_note = "a model of what is under the point, at " +
+                      std::to_string((first.position_m - lv.position_head_m).norm()) + " m";
+    return first;
+  }
+  if (!clicked_.active()) return std::nullopt;
+  const Track* track = nullptr;
+  for (const Track& t : tracker_.tracks()) {
+    if (t.class_name == ClickedTracker::kClassName) track = &t;
+  }
+  std::optional<ClickedObject> found = clicked_.find(track, t_s, crops, lv, rv, &why);
+  if (found) {
+    clicked_seen_s_ = t_s;
+    return found;
+  }
+  ++counters_["click_misses"];
+  // Unseen as long as a track coasts: gone; its model with it.
+  if (t_s - clicked_seen_s_ > tracker_.params().coast_s) {
+    clicked_.stop();
+    ++counters_["click_models_lost"];
+    out->click_note = "the clicked object is lost (" + why + "); its model dropped";
+  }
+  return std::nullopt;
+}
+
 int64_t DetectPipeline::chooseTarget(double t_s, bool* reason_changed) {
   const int64_t before = selector_.targetId();
   const std::string reason_before = selector_.reason();
@@ -304,6 +368,25 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
       r.mode = TargetRequest::Mode::kImagePoint;
       r.camera = m.camera == ptzstereo::target_select_t::CAMERA_LEFT ? Side::kLeft : Side::kRight;
       r.pixel = {m.x_px, m.y_px};
+      if (config_.click_to_track) {
+        const CameraView& view = r.camera == Side::kLeft ? last_views_->first : last_views_->second;
+        std::string on_track;
+        if (selector_.request(r, tracker_.tracks(), last_views_->first, last_views_->second,
+                              &on_track)) {
+          return true;
+        }
+        if (!r.pixel.allFinite() || r.pixel.x() < 0 || r.pixel.y() < 0 ||
+            r.pixel.x() > view.width - 1 || r.pixel.y() > view.height - 1) {
+          *why = on_track;
+          return false;
+        }
+        // On no track: what is under the point becomes the target, from the next frame.
+        pending_click_ = {r.camera, r.pixel};
+        TargetRequest clicked;
+        clicked.class_name = ClickedTracker::kClassName;
+        return selector_.request(clicked, tracker_.tracks(), last_views_->first,
+                                 last_views_->second, why);
+      }
       break;
     default:
       *why = "mode " + std::to_string(m.mode) + " is none of 0, 1, 2";

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "common/rig.hpp"
+#include "perception/appearance/clicked.hpp"
 #include "perception/detect/detect_params.hpp"
 #include "perception/tracking/target.hpp"
 #include "ptzstereo/object_detections_t.hpp"
@@ -36,6 +37,8 @@ struct FrameOutputs {
   ptzstereo::object_tracks_t tracks;
   // The target's reason changed in this frame (ptz-detect says the new one on stderr).
   bool target_reason_changed = false;
+  // A click's model started or refused, or its object lost, in this frame (said on stderr).
+  std::string click_note;
 };
 
 class DetectPipeline {
@@ -50,8 +53,9 @@ class DetectPipeline {
 
   // A TARGET_SELECT request (fresh: the main judged it) against the tracks and the views of the
   // newest frame processed. False and *why when it cannot be met: an unknown class, track or
-  // mode, a camera neither left nor right, a point on no track or before any frame; the target
-  // then stays.
+  // mode, a camera neither left nor right, a point outside the image or before any frame; the
+  // target then stays. A point on no track (with click_to_track) starts a model of what is under
+  // it with the next frame, and the target becomes that object (class "clicked").
   bool select(const ptzstereo::target_select_t& request, std::string* why);
 
   int64_t targetId() const { return selector_.targetId(); }
@@ -77,11 +81,16 @@ class DetectPipeline {
                                    const CameraView& lv, const CameraView& rv);
   // The selector's choice after this frame's tracker update; *reason_changed when its reason did.
   int64_t chooseTarget(double t_s, bool* reason_changed);
+  // The clicked object of this frame: a pending click's model started, or the model's object found.
+  std::optional<ClickedObject> clickedObject(double t_s, const CropPixels crops[2],
+                                             const CameraView& lv, const CameraView& rv,
+                                             FrameOutputs* out);
   // The three messages of a processed frame.
   void makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
                     const std::vector<Region>& lr, const std::vector<Region>& rr,
                     const std::vector<StereoObject>& objects, const std::vector<BoxYaw>& yaws,
-                    const MarkerScan& markers, const CameraView& lv, FrameOutputs* out) const;
+                    const MarkerScan& markers, const std::optional<ClickedObject>& clicked,
+                    const CameraView& lv, FrameOutputs* out) const;
   void setCounters(int64_t target_id, int64_t target_index);
 
   DetectConfig config_;
@@ -92,6 +101,10 @@ class DetectPipeline {
   TargetSelector selector_;
   WindowScanner windows_;
   MarkerScanner markers_;
+  ClickedTracker clicked_;
+  // A click on no track, waiting for the next frame's pixels to start a model.
+  std::optional<std::pair<Side, Eigen::Vector2d>> pending_click_;
+  double clicked_seen_s_ = 0;  // when the clicked object was last found
   std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
   std::vector<double> processing_ms_;
   std::vector<double> orientation_us_;

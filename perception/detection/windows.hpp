@@ -82,6 +82,9 @@ using DecodeParts = std::function<bool(const std::vector<cv::Rect>& rects,
 // rows row0 / scale .. ceil(row1 / scale) of the whole image reduced to reducedSize(), 8-bit BGR.
 using DecodeReduced =
     std::function<bool(int scale, int row0, int row1, cv::Mat* reduced, std::string* why)>;
+// The pixels of `rect` (full-image coordinates, inside the image) of one camera's image, 8-bit BGR:
+// how the markers' and the clicked objects' searches read a frame.
+using CropPixels = std::function<bool(const cv::Rect& rect, cv::Mat* out, std::string* why)>;
 // A camera's pixels: parts at full resolution, and rows reduced (when empty: the rows from
 // `parts`, reduced by cv::resize INTER_AREA). Implicit: parts alone will do.
 struct ImagePixels {

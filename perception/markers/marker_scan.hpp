@@ -29,9 +29,6 @@ struct MarkerScanParams {
   MarkerPoseParams pose;
 };
 
-// The pixels of `rect` (full-image coordinates) of one camera's image, 8-bit BGR.
-using CropPixels = std::function<bool(const cv::Rect& rect, cv::Mat* out, std::string* why)>;
-
 struct MarkerScan {
   std::vector<MarkerSighting> sightings[2];  // left, right
   std::vector<MarkerObject> objects;

@@ -27,10 +27,31 @@ struct Listener {
   // lockstep), and each truth is scored at its own frame's time.
   std::map<int64_t, ptzstereo::sim_truth_t> truths;
   int64_t first_target_seq = -1;  // the first frame whose pose has a target (the acquisition)
+  // A click to send (TARGET_SELECT by image point): on the object of this name, where the left
+  // camera sees its centre in the frame click_frame (as an operator clicks in ptz-view).
+  std::string click_object;
+  int64_t click_frame = -1;
+  lcm::LCM* lcm = nullptr;
+  bool clicked = false;
 
   void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
     metrics.onTruth(*m);
     truths.emplace(m->frame_seq, *m);
+    if (clicked || click_frame < 0 || m->frame_seq < click_frame || !lcm) return;
+    for (const auto& o : m->objects) {
+      if (o.name != click_object) continue;
+      const Eigen::Vector2d px = ptz::tools::toView(m->left_camera)
+                                     .project({o.position_m[0], o.position_m[1], o.position_m[2]});
+      ptzstereo::target_select_t s{};
+      s.utime = s.publish_utime = ptz::wallUtime();
+      s.mode = ptzstereo::target_select_t::MODE_IMAGE_POINT;
+      s.camera = ptzstereo::target_select_t::CAMERA_LEFT;
+      s.x_px = px.x();
+      s.y_px = px.y();
+      s.frame_seq = m->frame_seq;
+      lcm->publish("TARGET_SELECT", &s);
+      clicked = true;
+    }
   }
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
     metrics.onPose(*m);
@@ -56,14 +77,20 @@ struct Listener {
 
 // Starts ptz-detect and ptz-control, waits until both are up, runs ptz-sim to its end.
 // target_class: the class the run's numbers score (ptz-detect's own comes from its arguments).
+// click_object, click_frame: a click on that object in that frame (Listener).
 inline std::unique_ptr<Listener> runLoop(const std::vector<std::string>& sim_args,
                                          const std::vector<std::string>& control_args,
                                          const std::vector<std::string>& detect_args = {},
-                                         const std::string& target_class = "red_ball") {
+                                         const std::string& target_class = "red_ball",
+                                         const std::string& click_object = "",
+                                         int64_t click_frame = -1) {
   using namespace std::chrono_literals;
   lcm::LCM lcm(kTestUrl);
   auto l = std::make_unique<Listener>();
   l->metrics = ptz::tools::RunMetrics(target_class);
+  l->click_object = click_object;
+  l->click_frame = click_frame;
+  l->lcm = &lcm;
   lcm.subscribe("SIM_TRUTH", &Listener::onTruth, l.get());
   lcm.subscribe("OBJECT_POSE", &Listener::onPose, l.get());
   lcm.subscribe("PTZ_SETPOINT", &Listener::onSetpoint, l.get());
@@ -88,6 +115,10 @@ inline std::unique_ptr<Listener> runLoop(const std::vector<std::string>& sim_arg
       lcm, [&] { return sim.wait(0ms) >= 0; }, 240s);
   drain(lcm, 300ms);
   EXPECT_EQ(sim.wait(0ms), 0);
+  l->lcm = nullptr;
+  if (click_frame >= 0) {
+    EXPECT_TRUE(l->clicked) << "no click was sent on " << click_object;
+  }
   return l;
 }
 

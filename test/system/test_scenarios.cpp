@@ -91,8 +91,12 @@ void runScenario(const std::string& path) {
                                        : static_cast<std::string>(scenario["target_class"]);
   std::vector<std::string> detect_args = {"--target-class", target_class};
   for (const std::string& a : strings(scenario["detect_args"])) detect_args.push_back(a);
-  auto run =
-      ptz::test::runLoop(sim_args, strings(scenario["control_args"]), detect_args, target_class);
+  // A click (optional): on an object, in a frame, as an operator clicks in ptz-view.
+  const cv::FileNode click = scenario["click"];
+  const std::string click_object = click.empty() ? "" : static_cast<std::string>(click["object"]);
+  const int64_t click_frame = click.empty() ? -1 : static_cast<int>(click["frame"]);
+  auto run = ptz::test::runLoop(sim_args, strings(scenario["control_args"]), detect_args,
+                                target_class, click_object, click_frame);
   const RunSummary s = run->metrics.summary();
   std::printf("%s", s.toJson().c_str());
   EXPECT_EQ(run->counters["ptz-sim"]["lockstep_timeouts"], 0);

@@ -18,19 +18,6 @@ namespace {
 // A share of an object's pixels that counts as all of them (antialiased edges, rounding).
 constexpr double kFullyVisible = 0.98;
 
-CameraView toView(const ptzstereo::camera_model_t& m) {
-  CameraView v;
-  v.width = m.width;
-  v.height = m.height;
-  v.intrinsics = {m.fx_px, m.fy_px, m.cx_px, m.cy_px, {}};
-  for (int i = 0; i < 5; ++i) v.intrinsics.distortion[i] = m.distortion[i];
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) v.rotation_head_camera(r, c) = m.rotation_head_camera[r * 3 + c];
-    v.position_head_m[r] = m.position_head_m[r];
-  }
-  return v;
-}
-
 // The offset of p from one image's centre, px; false when p is behind the camera (or the
 // model gives no number). Brown distortion is a polynomial fitted inside the image: far outside
 // it diverges (1e12 px near 90 deg off the axis) or folds back in, so there the pinhole offset.
@@ -99,6 +86,19 @@ std::string number(double v) {
 }
 
 }  // namespace
+
+CameraView toView(const ptzstereo::camera_model_t& m) {
+  CameraView v;
+  v.width = m.width;
+  v.height = m.height;
+  v.intrinsics = {m.fx_px, m.fy_px, m.cx_px, m.cy_px, {}};
+  for (int i = 0; i < 5; ++i) v.intrinsics.distortion[i] = m.distortion[i];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) v.rotation_head_camera(r, c) = m.rotation_head_camera[r * 3 + c];
+    v.position_head_m[r] = m.position_head_m[r];
+  }
+  return v;
+}
 
 struct RunMetrics::Scored {
   std::map<int64_t, FrameScore> frames;

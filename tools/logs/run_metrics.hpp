@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "common/rig.hpp"
+#include "ptzstereo/camera_model_t.hpp"
 #include "ptzstereo/control_state_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
 #include "ptzstereo/process_status_t.hpp"
@@ -17,6 +19,9 @@
 #include "ptzstereo/stereo_frame_t.hpp"
 
 namespace ptz::tools {
+
+// A camera of SIM_TRUTH as the rig's view (its pose and intrinsics at capture).
+CameraView toView(const ptzstereo::camera_model_t& m);
 
 struct RunSummary {
   int64_t frames_published = 0;  // the simulator's count, else frames seen (by any message)

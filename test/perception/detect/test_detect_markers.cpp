@@ -151,6 +151,10 @@ TEST_F(MarkerPipeline, TaggedObjectsAreTracksWithTheirWholeOrientation) {
     ++matched;
   }
   EXPECT_GE(matched, 3);  // two faces of the tool (turned 35 degrees) and the loose tag
+  // The counts the message is encoded by cover them all.
+  EXPECT_EQ(out.detections.num_left, static_cast<int32_t>(out.detections.left.size()));
+  EXPECT_EQ(out.detections.num_right, static_cast<int32_t>(out.detections.right.size()));
+  EXPECT_EQ(out.pose.num_objects, static_cast<int32_t>(out.pose.objects.size()));
   EXPECT_GE(pipeline.counters().at("marker_objects"), 10);
   EXPECT_EQ(pipeline.counters().at("marker_bands_scanned"), 14);
   EXPECT_GT(pipeline.counters().at("track_rotations_accepted"), 10);
