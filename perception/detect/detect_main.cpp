@@ -61,14 +61,12 @@ class DetectNode {
       return;
     }
     status_.setCounters(pipeline_.counters());
-    if (!intake_.stillFresh(m, wallUtime())) return;  // went stale while processed: not answered
-    // Counted in once accepted: every message is either in or dropped, never both.
-    status_.countIn(ch_frame_, latencyMs(m.utime, received));
-    if (!out.click_note.empty())
-      std::fprintf(stderr, "ptz-detect: click: %s\n", out.click_note.c_str());
     if (!out.click_note.empty()) {
       std::fprintf(stderr, "ptz-detect: click: %s\n", out.click_note.c_str());
     }
+    if (!intake_.stillFresh(m, wallUtime())) return;  // went stale while processed: not answered
+    // Counted in once accepted: every message is either in or dropped, never both.
+    status_.countIn(ch_frame_, latencyMs(m.utime, received));
     if (out.target_reason_changed) {
       std::fprintf(stderr, "ptz-detect: target: %s\n", pipeline_.targetReason().c_str());
     }

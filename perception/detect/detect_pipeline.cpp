@@ -94,7 +94,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
           markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
     }
   }
-  const std::optional<ClickedObject> clicked = clickedObject(t_s, crops, lv, rv, out);
+  const std::optional<ClickedObject> clicked = clickedObject(m.seq, t_s, crops, lv, rv, out);
   if (clicked) {
     TrackMeasurement cm;
     cm.class_name = ClickedTracker::kClassName;
@@ -295,7 +295,8 @@ std::vector<BoxYaw> DetectPipeline::estimateYaws(const ptzstereo::stereo_frame_t
   return yaws;
 }
 
-std::optional<ClickedObject> DetectPipeline::clickedObject(double t_s, const CropPixels crops[2],
+std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t_s,
+                                                           const CropPixels crops[2],
                                                            const CameraView& lv,
                                                            const CameraView& rv,
                                                            FrameOutputs* out) {
@@ -306,12 +307,13 @@ std::optional<ClickedObject> DetectPipeline::clickedObject(double t_s, const Cro
     ClickedObject first;
     if (!clicked_.start(side, pixel, crops, lv, rv, &first, &why)) {
       ++counters_["click_models_refused"];
-      out->click_note = "no model of what is under the point: " + why;
+      out->click_note =
+          "frame " + std::to_string(seq) + ": no model of what is under the point: " + why;
       return std::nullopt;
     }
     ++counters_["click_models_started"];
     clicked_seen_s_ = t_s;
-    out->click_note = "a model of what is under the point, at " +
+    out->click_note = "frame " + std::to_string(seq) + ": a model of what is under the point, at " +
                       std::to_string((first.position_m - lv.position_head_m).norm()) + " m";
     return first;
   }

@@ -82,7 +82,7 @@ class DetectPipeline {
   // The selector's choice after this frame's tracker update; *reason_changed when its reason did.
   int64_t chooseTarget(double t_s, bool* reason_changed);
   // The clicked object of this frame: a pending click's model started, or the model's object found.
-  std::optional<ClickedObject> clickedObject(double t_s, const CropPixels crops[2],
+  std::optional<ClickedObject> clickedObject(int64_t seq, double t_s, const CropPixels crops[2],
                                              const CameraView& lv, const CameraView& rv,
                                              FrameOutputs* out);
   // The three messages of a processed frame.

@@ -129,9 +129,15 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
                                        : (a + b + c + d) * 0.25;
     out.push_back(s);
   };
+  // libapriltag 3.3 crashes on an image that is, once decimated, under 3 rows (its clustering
+  // reads tasks it never set: SIGSEGV) or under a column (a modulo by zero: SIGFPE): a window cut
+  // to a sliver at the frame's edge (fuzz_markers). Such a part is searched at full resolution,
+  // and one under 3 rows not at all (no tag fits in it).
+  double quad_decimate = decimate > 0 ? decimate : params_.apriltag_decimate;
+  if (grey.rows < 4 * quad_decimate || grey.cols < 4 * quad_decimate) quad_decimate = 1;
   for (const auto& a : apriltags_) {
-    a->detector->quad_decimate =
-        static_cast<float>(decimate > 0 ? decimate : params_.apriltag_decimate);
+    if (grey.rows < 3) break;
+    a->detector->quad_decimate = static_cast<float>(quad_decimate);
     image_u8_t im{grey.cols, grey.rows, static_cast<int32_t>(grey.step[0]), grey.data};
     zarray_t* found = apriltag_detector_detect(a->detector, &im);
     for (int i = 0; i < zarray_size(found); ++i) {
