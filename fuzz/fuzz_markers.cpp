@@ -16,11 +16,14 @@
 // are reached. The left and right images are two windows on one wider picture: a point `disparity`
 // px further right in the left image; both are the middle of the default rig's VGA frames.
 // Properties: every sighting's class, id within the family, hamming and margin within the params,
-// corners and centre finite, the corners within the image (or the part) grown by 3 px, a non-empty
-// bbox; markerObjects of both views' sightings, for a class of single tags (any id) and for a
-// bundle of the tags drawn: every object of a class that takes its sightings, its rotation
-// orthonormal (1e-6), its position finite and within range, its covariance finite, symmetric and of
-// non-negative variances, its RMS within max_rms_px; every failure one of the documented reasons.
+// corners and centre finite, the centre within the image (or the part) grown by 3 px and the
+// corners grown by 3 px and the tag's longest edge (a tag cut by the image's edge is read, the
+// corners beyond it extrapolated from its edges: libapriltag's 21 px out, edges of 55 px, 4.6 px
+// from the drawn corner), a non-empty bbox; markerObjects of both views' sightings, for a class of
+// single tags (any id) and for a bundle of the tags drawn: every object of a class that takes its
+// sightings, its rotation orthonormal (1e-6), its position finite and within range, its covariance
+// finite, symmetric and of non-negative variances, its RMS within max_rms_px; every failure one of
+// the documented reasons.
 #include <opencv2/imgproc.hpp>
 
 #include <Eigen/Dense>
@@ -45,7 +48,9 @@ using ptz::perception::MarkerClass;
 using ptz::perception::MarkerSighting;
 
 constexpr size_t kHeader = 18;
-constexpr double kMarginPx = 3;  // corners may lie this far outside what was searched
+// A centre may lie this far outside what was searched, a corner this far and the tag's longest
+// edge (extrapolated beyond the image's edge).
+constexpr double kMarginPx = 3;
 
 struct Choice {
   const char* detector;
@@ -115,8 +120,10 @@ std::vector<MarkerSighting> detect(int choice, const cv::Mat& image, const cv::P
   FUZZ_CHECK(unclaimed == 0, "unclaimed " + std::to_string(unclaimed));
   const ptz::perception::MarkerDetectorParams params;
   const int count = ptz::markerFamilyCount(kChoices[choice].family);
-  const cv::Rect2d area(offset.x - kMarginPx, offset.y - kMarginPx, image.cols + 2 * kMarginPx,
-                        image.rows + 2 * kMarginPx);
+  const auto within = [&](const cv::Point2d& p, double margin_px) {
+    return p.x >= offset.x - margin_px && p.y >= offset.y - margin_px &&
+           p.x <= offset.x + image.cols + margin_px && p.y <= offset.y + image.rows + margin_px;
+  };
   for (const MarkerSighting& s : seen) {
     FUZZ_CHECK(s.class_index >= 0 && static_cast<size_t>(s.class_index) < detector.classes().size(),
                "class_index " + std::to_string(s.class_index));
@@ -128,17 +135,27 @@ std::vector<MarkerSighting> detect(int choice, const cv::Mat& image, const cv::P
       FUZZ_CHECK(s.decision_margin >= params.min_decision_margin,
                  "decision margin " + std::to_string(s.decision_margin));
     }
+    double shortest_px = INFINITY, longest_px = 0;
     for (size_t k = 0; k < 4; ++k) {
       const cv::Point2d& c = s.corners_px[k];
       FUZZ_CHECK(finite(c), "corner " + std::to_string(k) + " " + text(c));
-      FUZZ_CHECK(c.x >= area.x && c.y >= area.y && c.x <= area.br().x && c.y <= area.br().y,
-                 "corner " + std::to_string(k) + " " + text(c) + " outside " +
-                     std::to_string(image.cols) + "x" + std::to_string(image.rows) + " at " +
-                     text(offset));
-      FUZZ_CHECK(cv::norm(c - s.corners_px[(k + 1) % 4]) >= params.min_edge_px,
-                 "an edge shorter than min_edge_px");
+      const double edge_px = cv::norm(c - s.corners_px[(k + 1) % 4]);
+      shortest_px = std::min(shortest_px, edge_px);
+      longest_px = std::max(longest_px, edge_px);
+    }
+    FUZZ_CHECK(shortest_px >= params.min_edge_px,
+               "an edge of " + std::to_string(shortest_px) + " px, shorter than min_edge_px");
+    const std::string image_at = std::to_string(image.cols) + "x" + std::to_string(image.rows) +
+                                 " at " + text(offset) + ", edges " + std::to_string(shortest_px) +
+                                 ".." + std::to_string(longest_px);
+    for (size_t k = 0; k < 4; ++k) {
+      FUZZ_CHECK(
+          within(s.corners_px[k], kMarginPx + longest_px),
+          "corner " + std::to_string(k) + " " + text(s.corners_px[k]) + " outside " + image_at);
     }
     FUZZ_CHECK(finite(s.centre_px), "centre " + text(s.centre_px));
+    FUZZ_CHECK(within(s.centre_px, kMarginPx),
+               "centre " + text(s.centre_px) + " outside " + image_at);
     const cv::Rect box = s.bbox();
     FUZZ_CHECK(!box.empty() && box.width > 0 && box.height > 0, "empty bbox");
   }

@@ -134,11 +134,17 @@ bool ClickedTracker::start(Side side, const Eigen::Vector2d& pixel, const CropPi
   // The click's ray through the other view, pixel by pixel from near to far.
   const Eigen::Vector2d centre(rect.x + (rect.width - 1) / 2.0, rect.y + (rect.height - 1) / 2.0);
   const Eigen::Vector3d ray = pixelRay(cv_, centre);
+  // The patch as the other view sees it (its focal length may differ: another zoom).
+  patch_ = patch;
+  patch_fx_ = cv_.intrinsics.fx;
+  patch_range_m_ = 1;  // no range yet: scaled by the focal lengths alone
+  const cv::Mat other_patch = patchFor(ov.intrinsics.fx, 1);
+  const int other_half = other_patch.cols / 2 + 1;
   std::vector<cv::Point2d> line;
   for (double r = p_.min_range_m; r < p_.max_range_m; r *= 1.002) {
     const Eigen::Vector2d q = ov.project(cv_.position_head_m + r * ray);
-    if (!q.allFinite() || q.x() < half || q.y() < half || q.x() > ov.width - 1 - half ||
-        q.y() > ov.height - 1 - half) {
+    if (!q.allFinite() || q.x() < other_half || q.y() < other_half ||
+        q.x() > ov.width - 1 - other_half || q.y() > ov.height - 1 - other_half) {
       continue;
     }
     if (line.empty() || std::hypot(q.x() - line.back().x, q.y() - line.back().y) >= 0.5) {
@@ -146,17 +152,20 @@ bool ClickedTracker::start(Side side, const Eigen::Vector2d& pixel, const CropPi
     }
   }
   if (line.empty()) {
+    stop();
     *why = "the click's epipolar line is not in the other image";
     return false;
   }
-  patch_ = patch;
-  patch_fx_ = cv_.intrinsics.fx;
-  patch_range_m_ = 1;  // no range yet: scaled by the focal lengths alone
-  const cv::Mat other_patch = patchFor(ov.intrinsics.fx, 1);
   cv::Rect band = cv::boundingRect(std::vector<cv::Point>(line.begin(), line.end()));
   const int reach = other_patch.cols / 2 + 4;
   band = cv::Rect(band.x - reach, band.y - reach, band.width + 2 * reach, band.height + 2 * reach) &
          cv::Rect(0, 0, ov.width, ov.height);
+  // matchTemplate needs the band at least the patch's size both ways (else it swaps them).
+  if (band.width < other_patch.cols || band.height < other_patch.rows) {
+    stop();
+    *why = "the other view's patch does not fit along its epipolar line";
+    return false;
+  }
   cv::Mat other_pixels;
   if (!crop[o](band, &other_pixels, why)) {
     stop();

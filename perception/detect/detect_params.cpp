@@ -203,7 +203,17 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
     }
     c.markers = markerClassesFromConfig(fs["markers"], "markers file '" + markers_path + "'");
   }
+  for (const auto& colour : c.detector.classes) {
+    if (colour.name == ClickedTracker::kClassName || colour.name.find('#') != std::string::npos) {
+      throw ConfigError("config file '" + p.configPath() + "', classes: '" + colour.name +
+                        "' is reserved (clicked objects) or has a '#' (a tag's id)");
+    }
+  }
   for (const auto& m : c.markers) {
+    if (m.name == ClickedTracker::kClassName) {
+      throw ConfigError("config file '" + p.configPath() + "', markers: '" + m.name +
+                        "' is reserved for clicked objects");
+    }
     for (const auto& colour : c.detector.classes) {
       if (colour.name == m.name) {
         throw ConfigError("config file '" + p.configPath() + "', markers: class '" + m.name +
@@ -228,8 +238,8 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.click_to_track = p.getBool("click_to_track");
   c.clicked.patch_px = p.getInt("click_patch_px");
   c.clicked.min_score = p.getDouble("click_min_score");
-  c.clicked.min_range_m = c.stereo.min_range_m;
-  c.clicked.max_range_m = c.stereo.max_range_m;
+  c.clicked.min_range_m = p.getDouble("min_range_m");
+  c.clicked.max_range_m = p.getDouble("max_range_m");
   c.stereo.max_epipolar_px = p.getDouble("max_epipolar_px");
   c.stereo.max_area_ratio = p.getDouble("max_area_ratio");
   c.stereo.pixel_sigma_px = p.getDouble("pixel_sigma_px");

@@ -53,6 +53,14 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
   const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
   const double t_s = m.utime * 1e-6;
+  if (t_s < last_t_s_) {  // a new run of the source: a click and its model were the old run's
+    pending_click_.reset();
+    clicked_.stop();
+    recent_views_.clear();
+  }
+  last_t_s_ = t_s;
+  recent_views_.push_back({m.seq, {lv, rv}});
+  if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   const auto t0 = std::chrono::steady_clock::now();
   // Windows around the tracks' predicted images, or the whole frames; decoding only what is
   // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
@@ -86,15 +94,29 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
                                }};
   MarkerScan markers;
   if (markers_.enabled()) {
-    if (!markers_.scan(tracker_.tracks(), t_s, lv, rv, config_.windows, crops, &markers, why)) {
-      return false;
+    // OpenCV's or libapriltag's refusal of some part of a frame costs that frame its tags, never
+    // the process (counted).
+    try {
+      if (!markers_.scan(tracker_.tracks(), t_s, lv, rv, config_.windows, crops, &markers, why)) {
+        return false;
+      }
+    } catch (const cv::Exception& e) {
+      markers = {};
+      ++counters_["marker_errors"];
     }
     for (size_t i = 0; i < markers.objects.size(); ++i) {
       measurements.push_back(
           markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
     }
   }
-  const std::optional<ClickedObject> clicked = clickedObject(m.seq, t_s, crops, lv, rv, out);
+  std::optional<ClickedObject> clicked;
+  try {
+    clicked = clickedObject(m.seq, t_s, crops, lv, rv, out);
+  } catch (const cv::Exception& e) {
+    clicked_.stop();
+    ++counters_["click_errors"];
+    out->click_note = std::string("the click's model failed: ") + e.what();
+  }
   if (clicked) {
     TrackMeasurement cm;
     cm.class_name = ClickedTracker::kClassName;
@@ -155,10 +177,17 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
           toMessage(t, markers_.classes()[static_cast<size_t>(t.class_index)].objectName(t.id)));
     }
   }
+  // Matched where the tag is once in each view (twice in one: which is which cannot be told).
+  const auto count = [](const std::vector<MarkerSighting>& v, const MarkerSighting& t) {
+    return std::count_if(v.begin(), v.end(), [&](const MarkerSighting& o) {
+      return o.class_index == t.class_index && o.id == t.id;
+    });
+  };
   for (size_t i = 0; i < markers.sightings[0].size(); ++i) {
     for (size_t j = 0; j < markers.sightings[1].size(); ++j) {
       const MarkerSighting &a = markers.sightings[0][i], &b = markers.sightings[1][j];
-      if (a.class_index == b.class_index && a.id == b.id) {
+      if (a.class_index == b.class_index && a.id == b.id && count(markers.sightings[0], a) == 1 &&
+          count(markers.sightings[1], b) == 1) {
         det.left[first_left + i].match_index = static_cast<int32_t>(first_right + j);
         det.right[first_right + j].match_index = static_cast<int32_t>(first_left + i);
       }
@@ -302,8 +331,11 @@ std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t
                                                            FrameOutputs* out) {
   std::string why;
   if (pending_click_) {
-    const auto [side, pixel] = *pending_click_;
+    const auto [side, direction] = *pending_click_;
     pending_click_.reset();
+    // Where the click's direction is now: the heads turn about their pivots, so a far point of it.
+    const CameraView& view = side == Side::kLeft ? lv : rv;
+    const Eigen::Vector2d pixel = view.project(view.position_head_m + 100 * direction);
     ClickedObject first;
     if (!clicked_.start(side, pixel, crops, lv, rv, &first, &why)) {
       ++counters_["click_models_refused"];
@@ -313,6 +345,13 @@ std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t
     }
     ++counters_["click_models_started"];
     clicked_seen_s_ = t_s;
+    // The new object is the target from now on (the old clicked one's track gone with it).
+    tracker_.eraseClass(ClickedTracker::kClassName);
+    selector_.release("a click: waiting for its object's confirmed track");
+    TargetRequest clicked_class;
+    clicked_class.class_name = ClickedTracker::kClassName;
+    std::string unused;
+    selector_.request(clicked_class, tracker_.tracks(), lv, rv, &unused);
     out->click_note = "frame " + std::to_string(seq) + ": a model of what is under the point, at " +
                       std::to_string((first.position_m - lv.position_head_m).norm()) + " m";
     return first;
@@ -371,23 +410,30 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
       r.camera = m.camera == ptzstereo::target_select_t::CAMERA_LEFT ? Side::kLeft : Side::kRight;
       r.pixel = {m.x_px, m.y_px};
       if (config_.click_to_track) {
-        const CameraView& view = r.camera == Side::kLeft ? last_views_->first : last_views_->second;
         std::string on_track;
         if (selector_.request(r, tracker_.tracks(), last_views_->first, last_views_->second,
                               &on_track)) {
+          settleClick();
           return true;
         }
+        // On no track: what is under the point in the frame it was made on becomes the target,
+        // once the next frame has shown it (the target stays until then, and if it cannot be).
+        const auto held = std::find_if(recent_views_.rbegin(), recent_views_.rend(),
+                                       [&](const auto& v) { return v.first == m.frame_seq; });
+        if (m.frame_seq >= 0 && held == recent_views_.rend()) {
+          *why = "frame " + std::to_string(m.frame_seq) + " is not one of the last " +
+                 std::to_string(kViewsKept) + " processed";
+          return false;
+        }
+        const auto& views = m.frame_seq >= 0 ? held->second : recent_views_.back().second;
+        const CameraView& view = r.camera == Side::kLeft ? views.first : views.second;
         if (!r.pixel.allFinite() || r.pixel.x() < 0 || r.pixel.y() < 0 ||
             r.pixel.x() > view.width - 1 || r.pixel.y() > view.height - 1) {
           *why = on_track;
           return false;
         }
-        // On no track: what is under the point becomes the target, from the next frame.
-        pending_click_ = {r.camera, r.pixel};
-        TargetRequest clicked;
-        clicked.class_name = ClickedTracker::kClassName;
-        return selector_.request(clicked, tracker_.tracks(), last_views_->first,
-                                 last_views_->second, why);
+        pending_click_ = {r.camera, pixelRay(view, r.pixel)};
+        return true;
       }
       break;
     default:
@@ -395,8 +441,17 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
       return false;
   }
   const CameraView none;
-  return selector_.request(r, tracker_.tracks(), last_views_ ? last_views_->first : none,
-                           last_views_ ? last_views_->second : none, why);
+  if (!selector_.request(r, tracker_.tracks(), last_views_ ? last_views_->first : none,
+                         last_views_ ? last_views_->second : none, why)) {
+    return false;
+  }
+  settleClick();
+  return true;
+}
+
+void DetectPipeline::settleClick() {
+  pending_click_.reset();
+  if (selector_.targetClass() != ClickedTracker::kClassName) clicked_.stop();
 }
 
 }  // namespace ptz::perception

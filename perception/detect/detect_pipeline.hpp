@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <optional>
 #include <string>
@@ -85,6 +86,9 @@ class DetectPipeline {
   std::optional<ClickedObject> clickedObject(int64_t seq, double t_s, const CropPixels crops[2],
                                              const CameraView& lv, const CameraView& rv,
                                              FrameOutputs* out);
+  // After a request met by another target: a pending click is forgotten, and the clicked object's
+  // model dropped unless the target is still of its class.
+  void settleClick();
   // The three messages of a processed frame.
   void makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
                     const std::vector<Region>& lr, const std::vector<Region>& rr,
@@ -102,9 +106,14 @@ class DetectPipeline {
   WindowScanner windows_;
   MarkerScanner markers_;
   ClickedTracker clicked_;
-  // A click on no track, waiting for the next frame's pixels to start a model.
-  std::optional<std::pair<Side, Eigen::Vector2d>> pending_click_;
+  // A click on no track, waiting for the next frame's pixels to start a model: its camera and the
+  // head-frame direction of its pixel in the frame it was made on (the heads may turn meanwhile).
+  std::optional<std::pair<Side, Eigen::Vector3d>> pending_click_;
   double clicked_seen_s_ = 0;  // when the clicked object was last found
+  double last_t_s_ = -1e300;   // the newest frame's time (going back: a new run)
+  // The views of the newest frames by seq: a click names the frame it was made on.
+  static constexpr size_t kViewsKept = 32;
+  std::deque<std::pair<int64_t, std::pair<CameraView, CameraView>>> recent_views_;
   std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
   std::vector<double> processing_ms_;
   std::vector<double> orientation_us_;

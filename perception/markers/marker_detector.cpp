@@ -7,6 +7,7 @@
 #include <opencv2/aruco.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/config.hpp"
@@ -83,7 +84,8 @@ MarkerDetector::MarkerDetector(std::vector<MarkerClass> classes, MarkerDetectorP
 MarkerDetector::~MarkerDetector() = default;
 
 std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const cv::Point& offset,
-                                                   int* unclaimed, double decimate) {
+                                                   int* unclaimed, double decimate,
+                                                   int only_class) {
   std::vector<MarkerSighting> out;
   if (image.empty()) return out;
   cv::Mat grey;
@@ -111,6 +113,7 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
     for (int k = 0; k < 4; ++k) {
       if (cv::norm(corners[static_cast<size_t>(k)] - corners[static_cast<size_t>((k + 1) % 4)]) <
           params_.min_edge_px) {
+        ++refused_small_;
         return;
       }
     }
@@ -135,7 +138,14 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
   // and one under 3 rows not at all (no tag fits in it).
   double quad_decimate = decimate > 0 ? decimate : params_.apriltag_decimate;
   if (grey.rows < 4 * quad_decimate || grey.cols < 4 * quad_decimate) quad_decimate = 1;
+  // Whether a family's detector runs in this call.
+  const auto wanted = [&](const std::string& family, const char* detector) {
+    if (only_class < 0 || static_cast<size_t>(only_class) >= classes_.size()) return true;
+    const MarkerClass& c = classes_[static_cast<size_t>(only_class)];
+    return c.family == family && c.detector == detector;
+  };
   for (const auto& a : apriltags_) {
+    if (!wanted(a->family, "apriltag")) continue;
     if (grey.rows < 3) break;
     a->detector->quad_decimate = static_cast<float>(quad_decimate);
     image_u8_t im{grey.cols, grey.rows, static_cast<int32_t>(grey.step[0]), grey.data};
@@ -143,8 +153,12 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
     for (int i = 0; i < zarray_size(found); ++i) {
       apriltag_detection_t* det = nullptr;
       zarray_get(found, i, &det);
-      if (det->hamming > params_.max_hamming ||
-          det->decision_margin < params_.min_decision_margin) {
+      if (det->hamming > params_.max_hamming) {
+        ++refused_hamming_;
+        continue;
+      }
+      if (det->decision_margin < params_.min_decision_margin) {
+        ++refused_margin_;
         continue;
       }
       // libapriltag's corners go bottom-left, bottom-right, top-right, top-left (its tag frame's
@@ -157,18 +171,32 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
     }
     apriltag_detections_destroy(found);
   }
+  // ArUco costs 6-8 times libapriltag on a textured image: where a decimation is asked for (a
+  // band's search for new tags; a tracked tag's window is at full resolution) it reads the part
+  // reduced by it, and its corners are scaled back.
+  const double aruco_scale = decimate > 1 ? decimate : 1;
+  cv::Mat aruco_grey = grey;
+  const bool any_aruco = std::any_of(arucos_.begin(), arucos_.end(),
+                                     [&](const auto& a) { return wanted(a->family, "aruco"); });
+  if (aruco_scale > 1 && any_aruco) {
+    cv::resize(grey, aruco_grey, cv::Size(), 1 / aruco_scale, 1 / aruco_scale, cv::INTER_AREA);
+  }
   for (const auto& a : arucos_) {
+    if (aruco_grey.cols < 8 || aruco_grey.rows < 8) break;  // no tag of min_edge_px fits
+    if (!wanted(a->family, "aruco")) continue;
     std::vector<std::vector<cv::Point2f>> corners;
     std::vector<int> ids;
-    cv::aruco::detectMarkers(grey, a->dictionary, corners, ids, a->params);
+    cv::aruco::detectMarkers(aruco_grey, a->dictionary, corners, ids, a->params);
     for (size_t i = 0; i < ids.size(); ++i) {
       if (corners[i].size() != 4) continue;
       // ArUco's top-left of an AprilTag is the printed tag's bottom-right.
       const size_t turn = markerFamilyUpsideDownInOpenCv(a->family) ? 2 : 0;
       std::array<cv::Point2d, 4> c;
-      // Its AprilTag refinement (libapriltag's, ported) keeps libapriltag's +0.5 pixel centres.
-      for (size_t k = 0; k < 4; ++k)
-        c[k] = cv::Point2d(corners[i][(k + turn) % 4]) - cv::Point2d(0.5, 0.5);
+      // Its AprilTag refinement (libapriltag's, ported) keeps libapriltag's +0.5 pixel centres,
+      // i.e. pixel edges at the integers: a reduced image's coordinates scale from them.
+      for (size_t k = 0; k < 4; ++k) {
+        c[k] = cv::Point2d(corners[i][(k + turn) % 4]) * aruco_scale - cv::Point2d(0.5, 0.5);
+      }
       add(classOf(a->family, "aruco", ids[i]), ids[i], c, 0, 0);
     }
   }

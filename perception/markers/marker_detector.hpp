@@ -48,10 +48,17 @@ class MarkerDetector {
 
   // The tags of the classes in an 8-bit grey or BGR part of an image whose top-left pixel is
   // `offset` in the full image; an id no class takes is left out (counted in *unclaimed).
-  // decimate > 0: libapriltag's quad_decimate for this call (else the params').
+  // decimate > 0: libapriltag's quad_decimate for this call (else the params'), and ArUco's image
+  // reduced by it. only_class >= 0: that class's detector and family alone.
   std::vector<MarkerSighting> detect(const cv::Mat& image, const cv::Point& offset,
-                                     int* unclaimed = nullptr, double decimate = 0);
+                                     int* unclaimed = nullptr, double decimate = 0,
+                                     int only_class = -1);
   const std::vector<MarkerClass>& classes() const { return classes_; }
+  // Tags refused since the start: more bits corrected than max_hamming, a decision margin under
+  // min_decision_margin, an edge under min_edge_px.
+  int64_t refusedHamming() const { return refused_hamming_; }
+  int64_t refusedMargin() const { return refused_margin_; }
+  int64_t refusedSmall() const { return refused_small_; }
 
  private:
   struct AprilTag;
@@ -60,6 +67,7 @@ class MarkerDetector {
   MarkerDetectorParams params_;
   std::vector<std::unique_ptr<AprilTag>> apriltags_;  // one per family
   std::vector<std::unique_ptr<Aruco>> arucos_;        // one per family
+  int64_t refused_hamming_ = 0, refused_margin_ = 0, refused_small_ = 0;
 };
 
 }  // namespace ptz::perception

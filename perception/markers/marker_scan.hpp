@@ -36,11 +36,13 @@ struct MarkerScan {
 
 class MarkerScanner {
  public:
+  static constexpr size_t kMaxSightings = 64;  // a view's, a frame (the rest counted)
   MarkerScanner(std::vector<MarkerClass> classes, MarkerScanParams params, cv::Size image);
 
   bool enabled() const { return !classes_.empty(); }
-  // Whether a track's class is a tagged object's.
+  // Whether a track's class is a tagged object's; the index of its marker class (-1: none).
   bool isMarkerObject(const std::string& class_name) const;
+  int classOf(const std::string& class_name) const;
 
   // One frame: windows around the tracks of tagged objects (predicted to t_s, windows' params),
   // this frame's band; the sightings (a tag found in a window and the band counted once) and the
@@ -49,8 +51,12 @@ class MarkerScanner {
             const CameraView& right, const WindowParams& windows, const CropPixels crop[2],
             MarkerScan* out, std::string* why);
 
-  // marker_windows, marker_bands_scanned, marker_sightings, marker_objects,
-  // marker_ids_unclaimed, marker_pose_failed_<reason>; since the start.
+  // marker_windows, marker_windows_left_to_bands (larger than windows' max_cover_fraction of the
+  // image), marker_bands_scanned, marker_sightings, marker_sightings_capped, marker_objects,
+  // marker_ids_unclaimed, marker_cut_by_part (a tag crossing its window's or band's edge, not the
+  // image's: refused, its corners guessed), marker_refused_{hamming,margin,small},
+  // marker_pose_failed_<reason>;
+  // since the start.
   const std::map<std::string, int64_t>& counts() const { return counts_; }
   const std::vector<MarkerClass>& classes() const { return classes_; }
 

@@ -31,7 +31,9 @@ void transition(double dt, const RotationFilterParams& p, Matrix6d* F, Matrix6d*
 }  // namespace
 
 Eigen::Quaterniond RotationEstimate::rotationAt(double when_s) const {
-  return (turn(rate_rad_s * std::max(0.0, when_s - t_s)) * rotation).normalized();
+  // A coasting object's turn is extrapolated for half a second at most: an old rate is no guide.
+  return (turn(rate_rad_s * std::clamp(when_s - t_s, 0.0, kMaxExtrapolationS)) * rotation)
+      .normalized();
 }
 
 Eigen::Matrix3d RotationEstimate::covarianceAt(double when_s, const RotationFilterParams& p) const {

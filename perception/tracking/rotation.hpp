@@ -26,7 +26,9 @@ struct RotationEstimate {
   double t_s = 0;
   int misses = 0;  // measurements refused in a row
 
-  // The rotation and its 3 x 3 covariance (rad^2) predicted to when_s.
+  static constexpr double kMaxExtrapolationS = 0.5;
+  // The rotation (turned on for kMaxExtrapolationS at most) and its 3 x 3 covariance (rad^2)
+  // predicted to when_s.
   Eigen::Quaterniond rotationAt(double when_s) const;
   Eigen::Matrix3d covarianceAt(double when_s, const RotationFilterParams& p) const;
 };

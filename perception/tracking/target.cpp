@@ -36,6 +36,12 @@ void TargetSelector::lock(const Track& t, const std::string& why) {
   lost_.reset();
 }
 
+void TargetSelector::release(const std::string& why) {
+  locked_id_ = -1;
+  lost_.reset();
+  reason_ = why;
+}
+
 int64_t TargetSelector::choose(double t_s, const std::vector<Track>& tracks) {
   if (locked_id_ >= 0) {
     for (const auto& t : tracks) {

@@ -41,6 +41,8 @@ class TargetSelector {
   bool request(const TargetRequest& r, const std::vector<Track>& tracks, const CameraView& left,
                const CameraView& right, std::string* why);
 
+  // Lets go of the locked track (and of a lost one's prediction), saying why; the class stays.
+  void release(const std::string& why);
   int64_t targetId() const { return locked_id_; }
   const std::string& targetClass() const { return class_; }
   const std::string& reason() const { return reason_; }

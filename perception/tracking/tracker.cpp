@@ -96,6 +96,12 @@ bool Tracker::radiusOutOfLine(const Track& t, const TrackMeasurement& m) const {
          std::max(m.radius_m / t.radius_m, t.radius_m / m.radius_m) > p_.max_radius_ratio;
 }
 
+void Tracker::eraseClass(const std::string& class_name) {
+  tracks_.erase(std::remove_if(tracks_.begin(), tracks_.end(),
+                               [&](const Track& t) { return t.class_name == class_name; }),
+                tracks_.end());
+}
+
 void Tracker::correctYaw(Track* t, const TrackMeasurement& m) {
   if (!m.has_yaw || !std::isfinite(m.yaw_rad) || !(m.yaw_var_rad2 > 0) ||
       !std::isfinite(m.yaw_var_rad2) || !(m.yaw_period_rad > 0)) {

@@ -161,6 +161,8 @@ class Tracker {
   // Tracks moved by one view, since the start.
   int64_t viewUpdates() const { return view_updates_; }
   const std::vector<Track>& tracks() const { return tracks_; }
+  // Deletes every track of a class (a new click's object is not the old one's).
+  void eraseClass(const std::string& class_name);
   const Track* find(int64_t id) const;
   // Measurements not trusted as a centre, by reason, since the start.
   const std::map<std::string, int64_t>& untrustedCounts() const { return untrusted_counts_; }

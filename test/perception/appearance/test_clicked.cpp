@@ -110,6 +110,15 @@ TEST(Clicked, RefusesWhatItCannotModel) {
   EXPECT_NE(why.find("leaves the image"), std::string::npos) << why;
   EXPECT_FALSE(tracker.find(nullptr, 0, c.crop, f.left_view, f.right_view, &why).has_value());
 
+  // The right camera zoomed in twice as far, the click near the top: the other view's patch
+  // (twice the size) must fit along its line, or the click is refused (it once threw).
+  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+  const ptz::CameraView lz = rig.view(Side::kLeft, {0, 0, 1}),
+                        rz = rig.view(Side::kRight, {0, 0, 2});
+  for (const double y : {135.0, 140.0, 30.0, 450.0}) {
+    EXPECT_NO_THROW(tracker.start(Side::kLeft, {320, y}, c.crop, lz, rz, &o, &why)) << y;
+  }
+
   // Two plates of one texture side by side at one range: clicked on the right one, the left one
   // is on its line in the right view too (nearer along the click's ray), alike.
   sim::Scene twins;
@@ -156,6 +165,37 @@ TEST(Clicked, AClickOnNoTrackMakesTheClickedObjectTheTarget) {
   const auto& l = out.detections.left.at(static_cast<size_t>(target.left_index));
   EXPECT_EQ(l.class_name, "clicked");
   EXPECT_EQ(l.match_index, target.right_index);
+  // A click on the clicked track selects it; one whose patch would leave the image is refused with
+  // the next frame, and the target stays.
+  const int64_t first_id = out.tracks.target_id;
+  ASSERT_TRUE(pipeline.select(m, &why)) << why;  // on the clicked track: selects it
+  EXPECT_EQ(pipeline.targetId(), first_id);
+  ptzstereo::target_select_t edge = m;
+  edge.x_px = 2;  // the patch would leave the image
+  ASSERT_TRUE(pipeline.select(edge, &why)) << why;
+  out = ptz::test::feedFrame(&pipeline, frame, &seq);
+  EXPECT_NE(out.click_note.find("no model"), std::string::npos) << out.click_note;
+  EXPECT_EQ(out.tracks.target_id, first_id);  // the target stays
+  EXPECT_EQ(pipeline.counters().at("click_models_refused"), 1);
+  // A request by class forgets a pending click.
+  ptzstereo::target_select_t shifted = m;
+  shifted.x_px += 40;  // beside the plate's track, on the backdrop
+  ASSERT_TRUE(pipeline.select(shifted, &why)) << why;
+  ptzstereo::target_select_t by_class{};
+  by_class.mode = ptzstereo::target_select_t::MODE_CLASS;
+  by_class.class_name = "clicked";
+  ASSERT_TRUE(pipeline.select(by_class, &why)) << why;
+  out = ptz::test::feedFrame(&pipeline, frame, &seq);
+  EXPECT_TRUE(out.click_note.empty()) << out.click_note;
+  EXPECT_EQ(pipeline.counters().at("click_models_started"), 1);
+  // A click that names a frame no longer held is refused.
+  ptzstereo::target_select_t old = m;
+  old.frame_seq = 0;
+  for (int i = 0; i < 40; ++i) ptz::test::feedFrame(&pipeline, frame, &seq);
+  old.x_px += 40;
+  EXPECT_FALSE(pipeline.select(old, &why));
+  EXPECT_NE(why.find("not one of the last"), std::string::npos) << why;
+
   // With click_to_track off, a point on no track is refused as before.
   perception::DetectPipeline off = ptz::test::makeDetectPipeline({{"click_to_track", "false"}});
   ptz::test::feedFrame(&off, frame, &seq);

@@ -337,3 +337,20 @@ TEST(MarkerParams, ConfigErrorsNameTheField) {
   EXPECT_NE(error("%YAML:1.0\nmarkers:\n  - {name: 'a#b', size_m: 0.1, ids: any}\n").find("'#'"),
             std::string::npos);
 }
+
+// Parts of an image a few pixels high or wide (a tagged track's window cut by the image's edge):
+// libapriltag 3.3 divides by zero or reads outside them (fuzz_markers' finds); the detector finds
+// nothing in them, at every decimation.
+TEST(MarkerDetector, SliversOfAnImageFindNothing) {
+  perception::MarkerDetector april({singleTags("apriltag", "apriltag_36h11", 0.1)});
+  perception::MarkerDetector aruco({singleTags("aruco", "aruco_4x4_50", 0.1)});
+  for (const cv::Size size : {cv::Size(5, 1), cv::Size(1, 5), cv::Size(64, 2), cv::Size(2, 64),
+                              cv::Size(3, 3), cv::Size(7, 6)}) {
+    cv::Mat grey(size, CV_8UC1);
+    cv::randu(grey, 0, 255);
+    for (double decimate : {1.0, 1.5, 2.0, 4.0}) {
+      EXPECT_TRUE(april.detect(grey, {10, 10}, nullptr, decimate).empty()) << size;
+    }
+    EXPECT_TRUE(aruco.detect(grey, {10, 10}).empty()) << size;
+  }
+}
