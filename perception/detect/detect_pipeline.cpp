@@ -421,8 +421,10 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
         const auto held = std::find_if(recent_views_.rbegin(), recent_views_.rend(),
                                        [&](const auto& v) { return v.first == m.frame_seq; });
         if (m.frame_seq >= 0 && held == recent_views_.rend()) {
-          *why = "frame " + std::to_string(m.frame_seq) + " is not one of the last " +
-                 std::to_string(kViewsKept) + " processed";
+          *why = "frame " + std::to_string(m.frame_seq) +
+                 (m.frame_seq > recent_views_.back().first
+                      ? " is not processed yet"
+                      : " is not one of the last " + std::to_string(kViewsKept) + " processed");
           return false;
         }
         const auto& views = m.frame_seq >= 0 ? held->second : recent_views_.back().second;

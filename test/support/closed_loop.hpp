@@ -6,6 +6,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,34 +29,39 @@ struct Listener {
   std::map<int64_t, ptzstereo::sim_truth_t> truths;
   int64_t first_target_seq = -1;  // the first frame whose pose has a target (the acquisition)
   // A click to send (TARGET_SELECT by image point): on the object of this name, where the left
-  // camera sees its centre in the frame click_frame (as an operator clicks in ptz-view).
+  // camera sees its centre in the frame click_frame, sent once ptz-detect has answered that frame
+  // (as an operator clicks on a frame ptz-view shows with its detections).
   std::string click_object;
   int64_t click_frame = -1;
   lcm::LCM* lcm = nullptr;
   bool clicked = false;
+  std::optional<ptzstereo::target_select_t> click;
 
   void onTruth(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::sim_truth_t* m) {
     metrics.onTruth(*m);
     truths.emplace(m->frame_seq, *m);
-    if (clicked || click_frame < 0 || m->frame_seq < click_frame || !lcm) return;
+    if (click || click_frame < 0 || m->frame_seq < click_frame) return;
     for (const auto& o : m->objects) {
       if (o.name != click_object) continue;
       const Eigen::Vector2d px = ptz::tools::toView(m->left_camera)
                                      .project({o.position_m[0], o.position_m[1], o.position_m[2]});
       ptzstereo::target_select_t s{};
-      s.utime = s.publish_utime = ptz::wallUtime();
       s.mode = ptzstereo::target_select_t::MODE_IMAGE_POINT;
       s.camera = ptzstereo::target_select_t::CAMERA_LEFT;
       s.x_px = px.x();
       s.y_px = px.y();
       s.frame_seq = m->frame_seq;
-      lcm->publish("TARGET_SELECT", &s);
-      clicked = true;
+      click = s;
     }
   }
   void onPose(const lcm::ReceiveBuffer*, const std::string&, const ptzstereo::object_pose_t* m) {
     metrics.onPose(*m);
     if (first_target_seq < 0 && m->target_index >= 0) first_target_seq = m->frame_seq;
+    if (click && !clicked && lcm && m->frame_seq >= click->frame_seq) {
+      click->utime = click->publish_utime = ptz::wallUtime();
+      lcm->publish("TARGET_SELECT", &*click);
+      clicked = true;
+    }
   }
   void onSetpoint(const lcm::ReceiveBuffer*, const std::string&,
                   const ptzstereo::ptz_setpoint_t* m) {
