@@ -11,7 +11,8 @@
 #   channel equal the processes' own); --private-net with a command; bad input refused;
 # - scripts/demo warns when the simulator skips frames it cannot render in time;
 # - scripts/demo --head onvif: ptz-sim's ONVIF cameras driven by ptz-driver close the loop
-#   (ptz-driver's PTZ_STATE, the cameras' setpoints applied, no head errors); a bad --head refused.
+#   (ptz-driver's PTZ_STATE, the cameras' setpoints applied, no head errors); a bad --head refused;
+# - scripts/demo --scene markers --private-net: the tagged cube followed with its orientation.
 #   test_scripts.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 src=$1 build=$2
@@ -227,6 +228,24 @@ centring=$(sed -n 's/^ *"centering_rms_px": \([0-9.]*\).*/\1/p' "$work/demo-onvi
 awk -v c="${centring:-99}" 'BEGIN {exit !(c < 10)}' ||
   bad "demo --head onvif: centring ${centring:-?} px RMS"
 echo "demo --head onvif: ${states:-0} PTZ_STATE from ptz-driver, centring ${centring:-?} px RMS"
+
+echo "== scripts/demo --scene markers: the tagged cube followed by its tags, its whole orientation"
+out=$("$src/scripts/demo" --no-build --scene balloons 2>&1)
+rc=$?
+[ $rc -eq 2 ] && grep -q "scene must be default or markers" <<<"$out" ||
+  bad "demo --scene balloons: exit $rc, not refused: $(tail -3 <<<"$out")"
+# --private-net: the scene must survive the script's re-exec into its namespace.
+out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --scene markers --private-net \
+  --out "$work/demo-markers" 2>&1)
+rc=$?
+[ $rc -eq 0 ] || bad "demo --scene markers exits $rc: $(tail -5 <<<"$out")"
+samples=$(sed -n 's/^ *"orientation_samples": \([0-9]*\).*/\1/p' "$work/demo-markers/summary.json")
+orientation=$(sed -n 's/^ *"orientation_error_rms_deg": \([0-9.]*\).*/\1/p' \
+  "$work/demo-markers/summary.json")
+[ "${samples:-0}" -gt 60 ] || bad "demo --scene markers: ${samples:-no} orientation samples"
+awk -v o="${orientation:-99}" 'BEGIN {exit !(o < 2)}' ||
+  bad "demo --scene markers: orientation ${orientation:-?} deg RMS"
+echo "demo --scene markers: ${samples:-0} poses with the cube's orientation, ${orientation:-?} deg RMS"
 
 [ $fail -eq 0 ] && echo "PASSED"
 exit $fail
