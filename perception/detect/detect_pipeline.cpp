@@ -34,6 +34,16 @@ TrackMeasurement markerMeasurement(const MarkerObject& o, int object_index) {
   return m;
 }
 
+TrackMeasurement clickedMeasurement(const ClickedObject& o, int object_index) {
+  TrackMeasurement m;
+  m.class_name = ClickedTracker::kClassName;
+  m.position_m = o.position_m;
+  m.covariance_m2 = o.covariance_m2;
+  m.radius_m = o.radius_m;
+  m.object_index = object_index;
+  return m;
+}
+
 }  // namespace
 
 DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
@@ -59,8 +69,6 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     recent_views_.clear();
   }
   last_t_s_ = t_s;
-  recent_views_.push_back({m.seq, {lv, rv}});
-  if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   const auto t0 = std::chrono::steady_clock::now();
   // Windows around the tracks' predicted images, or the whole frames; decoding only what is
   // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
@@ -118,20 +126,16 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     out->click_note = std::string("the click's model failed: ") + e.what();
   }
   if (clicked) {
-    TrackMeasurement cm;
-    cm.class_name = ClickedTracker::kClassName;
-    cm.position_m = clicked->position_m;
-    cm.covariance_m2 = clicked->covariance_m2;
-    cm.radius_m = clicked->radius_m;
-    cm.object_index = static_cast<int>(objects.size() + markers.objects.size());
-    measurements.push_back(cm);
+    measurements.push_back(
+        clickedMeasurement(*clicked, static_cast<int>(objects.size() + markers.objects.size())));
   }
   const std::vector<ViewMeasurement> one_view = viewMeasurements(
       objects, lr, rr, lv, rv, class_names_, config_.stereo.pixel_sigma_px, tracker_.tracks(), t_s);
   tracker_.update(t_s, measurements);
   tracker_.updateFromViews(t_s, one_view, lv, rv);
   const int64_t target_id = chooseTarget(t_s, &out->target_reason_changed);
-  last_views_ = {lv, rv};
+  recent_views_.push_back({m.seq, {lv, rv}});
+  if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   processing_ms_.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, clicked, lv, out);
@@ -402,7 +406,7 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
         *why = "camera " + std::to_string(m.camera) + " is neither 0 nor 1";
         return false;
       }
-      if (!last_views_) {
+      if (recent_views_.empty()) {
         *why = "no frame seen yet";
         return false;
       }
@@ -411,8 +415,8 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
       r.pixel = {m.x_px, m.y_px};
       if (config_.click_to_track) {
         std::string on_track;
-        if (selector_.request(r, tracker_.tracks(), last_views_->first, last_views_->second,
-                              &on_track)) {
+        const auto& newest = recent_views_.back().second;
+        if (selector_.request(r, tracker_.tracks(), newest.first, newest.second, &on_track)) {
           settleClick();
           return true;
         }
@@ -443,8 +447,9 @@ bool DetectPipeline::select(const ptzstereo::target_select_t& m, std::string* wh
       return false;
   }
   const CameraView none;
-  if (!selector_.request(r, tracker_.tracks(), last_views_ ? last_views_->first : none,
-                         last_views_ ? last_views_->second : none, why)) {
+  const bool seen = !recent_views_.empty();
+  if (!selector_.request(r, tracker_.tracks(), seen ? recent_views_.back().second.first : none,
+                         seen ? recent_views_.back().second.second : none, why)) {
     return false;
   }
   settleClick();

@@ -111,10 +111,10 @@ class DetectPipeline {
   std::optional<std::pair<Side, Eigen::Vector3d>> pending_click_;
   double clicked_seen_s_ = 0;  // when the clicked object was last found
   double last_t_s_ = -1e300;   // the newest frame's time (going back: a new run)
-  // The views of the newest frames by seq: a click names the frame it was made on.
+  // The views of the newest frames processed, by seq (the last the newest): a click names the
+  // frame it was made on, a point on a track is judged in the newest.
   static constexpr size_t kViewsKept = 32;
   std::deque<std::pair<int64_t, std::pair<CameraView, CameraView>>> recent_views_;
-  std::optional<std::pair<CameraView, CameraView>> last_views_;  // of the newest frame
   std::vector<double> processing_ms_;
   std::vector<double> orientation_us_;
   std::map<std::string, int64_t> counters_;

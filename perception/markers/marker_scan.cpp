@@ -58,22 +58,25 @@ bool MarkerScanner::scan(const std::vector<Track>& tracks, double t_s, const Cam
   const CameraView* views[2] = {&left, &right};
   // Windows by class (a tracked tag is looked for by its own detector alone: ArUco costs 6-8
   // times libapriltag), merged within a class.
+  std::vector<std::vector<cv::Rect>> of_class[2];
+  for (auto& side : of_class) side.resize(classes_.size());
+  for (const Track& t : tracks) {
+    const int c = classOf(t.class_name);
+    if (c < 0) continue;
+    for (int s = 0; s < 2; ++s) {
+      cv::Rect r;
+      if (!trackWindow(*views[s], t, t_s, windows, &r)) continue;
+      r = evenCut(r, size_);
+      if (!r.empty()) of_class[s][static_cast<size_t>(c)].push_back(r);
+    }
+  }
+  // A window as large as much of the image (a track long unseen) is left to the band: a window is
+  // searched at full resolution, a band reduced.
   std::vector<std::pair<int, cv::Rect>> rects[2];
   const double image_area = static_cast<double>(size_.area());
-  for (size_t c = 0; c < classes_.size(); ++c) {
-    for (int s = 0; s < 2; ++s) {
-      std::vector<cv::Rect> of_class;
-      for (const Track& t : tracks) {
-        cv::Rect r;
-        if (classOf(t.class_name) == static_cast<int>(c) &&
-            trackWindow(*views[s], t, t_s, windows, &r)) {
-          r = evenCut(r, size_);
-          if (!r.empty()) of_class.push_back(r);
-        }
-      }
-      // A window as large as much of the image (a track long unseen) is left to the band: a
-      // window is searched at full resolution, a band reduced.
-      for (const cv::Rect& r : mergeRects(of_class)) {
+  for (int s = 0; s < 2; ++s) {
+    for (size_t c = 0; c < classes_.size(); ++c) {
+      for (const cv::Rect& r : mergeRects(of_class[s][c])) {
         if (r.area() > windows.max_cover_fraction * image_area) {
           ++counts_["marker_windows_left_to_bands"];
         } else {
