@@ -33,7 +33,8 @@ std::string yamlTextProblem(const std::string& path) {
       if (i == 0 && (dashes || dots)) return malformed("a second document: one per file");
       continue;
     }
-    if (line[i] == '%') continue;  // a directive
+    if (i == 0 && line[i] == '%')
+      continue;  // a directive (in column 1 only: indented, the parser loops)
     if (dashes && !marker) {
       const size_t rest = line.find_first_not_of(' ', i + 3);
       if (rest != std::string::npos && line[rest] != '#') {

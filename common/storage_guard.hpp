@@ -15,7 +15,8 @@ namespace ptz {
 // project writes and documents YAML alone. Refused: a file that does not begin with %YAML, a
 // control character (a NUL makes the parser lose its place in the line), and the layouts on
 // which it loops forever looking for a second document it never moves past: a top level that is
-// indented, in flow style or after content on the '---' line, a '...' or a second '---'.
+// indented, in flow style or after content on the '---' line, a '...' or a second '---' (a '%'
+// directive counts only in column 1: an indented one is an indented top level).
 std::string yamlTextProblem(const std::string& path);
 
 // Reads every key and every text of the tree once: the parser can leave a node whose name or text

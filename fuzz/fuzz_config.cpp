@@ -1,6 +1,7 @@
 // The config loader: Params::parseConfigFile on a YAML file written from the input, with the
 // parameters a process declares (transport, plant and limits, image encoding, freshness, and one
-// of each type with a range, an order and a section), then the readers processes use on them.
+// of each type with a range, an order and a section), then the readers processes use on them,
+// ptz-detect's marker classes (section `markers`) among them.
 // Properties: only ConfigError escapes, and a ConfigError of the file names the file; an
 // accepted file leaves every value of the declared type, within its range and order.
 #include <cmath>
@@ -8,9 +9,11 @@
 
 #include "common/config.hpp"
 #include "common/freshness.hpp"
+#include "common/markers.hpp"
 #include "common/plant.hpp"
 #include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "perception/markers/marker_params.hpp"
 
 namespace {
 
@@ -28,6 +31,7 @@ ptz::Params declare() {
   p.addOrder("min_range_m", "max_range_m");
   p.add("show", false, "a switch");
   p.addSection("objects", "a list only the file can give");
+  p.addSection("markers", "ptz-detect's fiducial marker classes");
   return p;
 }
 
@@ -73,6 +77,26 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     (void)p.section("objects");
   } catch (const ptz::ConfigError&) {
     // A value the file gave that a reader refuses: the right answer.
+  }
+  // ptz-detect's marker classes: refused naming the file, or each within what it promises.
+  try {
+    const std::string where = "config file '" + file.path() + "'";
+    for (const auto& c : ptz::perception::markerClassesFromConfig(p.section("markers"), where)) {
+      FUZZ_CHECK(!c.name.empty() && c.name.find('#') == std::string::npos, "name '" + c.name + "'");
+      FUZZ_CHECK(c.size_m >= 0.001 && c.size_m <= 10, "size_m " + std::to_string(c.size_m));
+      const int count = ptz::markerFamilyCount(c.family);
+      FUZZ_CHECK(count > 0, "family '" + c.family + "'");
+      for (int id : c.ids) FUZZ_CHECK(id >= 0 && id < count, "id " + std::to_string(id));
+      for (const auto& t : c.bundle) {
+        FUZZ_CHECK(t.id >= 0 && t.id < count && t.centre_m.allFinite() &&
+                       t.rotation_object_tag.allFinite(),
+                   "bundle tag " + std::to_string(t.id));
+      }
+      FUZZ_CHECK(std::isfinite(c.radiusM()), "radius");
+    }
+  } catch (const ptz::ConfigError& e) {
+    FUZZ_CHECK(ptz::fuzz::names(e.what(), file.path()),
+               std::string("markers error without the file: ") + e.what());
   }
   return 0;
 }

@@ -72,7 +72,8 @@ TEST(FuzzFinds, YamlFilesOnWhichOpenCvLoopsAreRefusedNamingTheFile) {
       {"fuzz_config", "find-hang-nul-in-a-line"},
       {"fuzz_pelco_model", "find-hang-content-after-marker"},
       {"fuzz_visca_model", "find-hang-second-document"},
-      {"fuzz_scene", "find-hang-second-document"}};
+      {"fuzz_scene", "find-hang-second-document"},
+      {"fuzz_scene", "find-hang-indented-directive"}};
   for (const auto& [target, name] : finds) {
     const std::string path = corpus(target, name);
     const std::string error = loadError([&] { ptz::openForRead(path, "config file"); });
