@@ -88,7 +88,7 @@ void run(const char* size_name, int width, int height) {
                                                return true;
                                              }};
     if (i == 0) {
-      perception::ClickedObject first;
+      perception::PatchObject first;
       clicked.start(ptz::Side::kLeft, lv.project(cube), crops, lv, rv, &first, &why);
       continue;
     }

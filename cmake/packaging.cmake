@@ -24,8 +24,9 @@ set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 # Added to the shared libraries' packages: lcm-logger (demo, run-rig), ip and unshare (demo
 # --private-net, check-network, the several-hosts scripts).
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "liblcm-bin, iproute2, util-linux")
-# lcm-spy (Java); RTSP cameras (GStreamer); demo-hosts' loss (nftables); stability-sweep's plot.
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "default-jre-headless | java-runtime-headless, liblcm-java, \
+# lcm-spy (Java); RTSP cameras (GStreamer); demo-hosts' loss (nftables); stability-sweep's plot;
+# ptz-detect's face cascades (opencv-data).
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "opencv-data, default-jre-headless | java-runtime-headless, liblcm-java, \
 libjchart2d-java, gstreamer1.0-plugins-good, gstreamer1.0-plugins-bad, gstreamer1.0-rtsp, \
 nftables, gnuplot-nox")
 # Building against the libraries (find_package(ptzstereo), pkg-config ptzstereo).

@@ -11,7 +11,7 @@
 #include "common/plant.hpp"
 #include "common/transport/transport.hpp"
 #include "fuzz/fuzz_support.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace {
 

@@ -44,8 +44,8 @@ PTZ_DEMO_PACKAGES=(
   build-essential cmake pkg-config ccache ninja-build
   liblcm-dev liblcm-bin libglib2.0-dev
   libopencv-dev libopencv-contrib-dev libeigen3-dev libpcl-dev
-  # fiducial markers: AprilTag (ArUco is in OpenCV contrib)
-  libapriltag-dev
+  # fiducial markers: AprilTag (ArUco is in OpenCV contrib); faces: OpenCV's cascades
+  libapriltag-dev opencv-data
   libgpiod-dev libsystemd-dev libjpeg-dev
   # ONVIF cameras: SOAP parsed by libxml2, WS-Security digests by OpenSSL, HTTP by libcurl
   libxml2-dev libssl-dev libcurl4-openssl-dev
@@ -70,6 +70,8 @@ PTZ_PACKAGES=(
   nftables xvfb x11-apps imagemagick xdotool
   # cpack -G DEB (test/deploy): its shared-library dependencies are read with file
   file
+  # real photographs for the face and people detectors' tests (OpenCV's samples)
+  opencv-doc
 )
 
 ptz_sudo() {

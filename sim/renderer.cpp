@@ -9,6 +9,8 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/scene/pictures.hpp"
+
 namespace ptz::sim {
 namespace {
 
@@ -284,6 +286,16 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
     o.oc = view.position_head_m - centre;
     o.box_to_head = object.rotationHeadObject(t_s);
     o.oc_box = o.box_to_head.transpose() * o.oc;
+    if (object.shape == SceneObject::Shape::kPerson) {
+      // Fine enough for a figure 1000 px tall (a person at 1.5 m through a long zoom).
+      o.picture = personPicture(1024, object.stride(t_s), object.color_bgr);
+      // Sub-rays only where a pixel may straddle the outline: inside and outside are one colour.
+      cv::Mat alpha;
+      cv::extractChannel(o.picture, alpha, 3);
+      cv::morphologyEx(alpha, o.edge, cv::MORPH_GRADIENT,
+                       cv::getStructuringElement(cv::MORPH_RECT,
+                                                 cv::Size(2 * kEdgeCells + 1, 2 * kEdgeCells + 1)));
+    }
   }
   // The rows any object may cover: a still view's bands need no rays outside them.
   int object_row0 = rows, object_row1 = 0;
@@ -419,15 +431,9 @@ void Renderer::drawBackground(const CameraView& view, const RayRows& rays,
   if (scene_.chessboard.present) drawChessboard(view, rays, board_rect, row0, row1, bgr);
 }
 
-// The share of the pixel (u, v) that is white on the tags of the box face it hits at p_box
-// (box frame; inward: the face's inward normal; t: the ray's length), by 4 x 4 sub-pixel rays
-// through the face's plane, so a tag's corners fall where they are to a fraction of a pixel.
-// 1 where no tag is near.
-double Renderer::tagWhiteFraction(const SceneObject& object, const ObjectFrame& frame,
-                                  const Eigen::Matrix3d& R, const RayRows& rays,
-                                  const CameraView& view, int u, int v,
-                                  const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
-                                  double t) {
+std::array<cv::Point, Renderer::kSubRays * Renderer::kSubRays> Renderer::subRayCells(
+    const ObjectFrame& frame, const Eigen::Matrix3d& R, const RayRows& rays, const CameraView& view,
+    int u, int v, const PicturePlane& plane) {
   // The ray's change along the row, and down the column as the same turned by a right angle
   // (scaled by fx / fy): a band holds its own rows only, and the image must not depend on bands.
   const int u1 = std::min(u + 1, view.width - 1), u0 = std::max(u - 1, 0);
@@ -436,42 +442,128 @@ double Renderer::tagWhiteFraction(const SceneObject& object, const ObjectFrame& 
       (rays.row(v)[u1] - rays.row(v)[u0]) * (1.0f / static_cast<float>(std::max(1, u1 - u0)));
   const float aspect = static_cast<float>(view.intrinsics.fx / view.intrinsics.fy);
   const cv::Vec2f gy(-gx[1] * aspect, gx[0] * aspect);
-  const double footprint_m = 2 * t * std::max(cv::norm(gx), cv::norm(gy));
+  const Eigen::Vector3d n = plane.axes.col(2);
+  const double distance = n.dot(plane.centre_m - frame.oc_box);
+  const double cell_x_m = plane.width_m / plane.cols, cell_y_m = plane.height_m / plane.rows;
+  std::array<cv::Point, kSubRays * kSubRays> cells;
+  for (int s = 0; s < kSubRays * kSubRays; ++s) {
+    cells[static_cast<size_t>(s)] = {-1, -1};
+    const float su = (static_cast<float>(s % kSubRays) + 0.5f) / kSubRays - 0.5f;
+    const float sv = (static_cast<float>(s / kSubRays) + 0.5f) / kSubRays - 0.5f;
+    const cv::Vec2f r = rc + gx * su + gy * sv;
+    const Eigen::Vector3d db = frame.box_to_head.transpose() * (R * Eigen::Vector3d(r[0], r[1], 1));
+    const double den = n.dot(db);
+    if (std::abs(den) < 1e-12) continue;
+    const Eigen::Vector3d q =
+        plane.axes.transpose() * (frame.oc_box + (distance / den) * db - plane.centre_m);
+    const double col = std::floor((q.x() + plane.width_m / 2) / cell_x_m),
+                 row = std::floor((q.y() + plane.height_m / 2) / cell_y_m);
+    if (col >= 0 && row >= 0 && col < plane.cols && row < plane.rows) {
+      cells[static_cast<size_t>(s)] = {static_cast<int>(col), static_cast<int>(row)};
+    }
+  }
+  return cells;
+}
+
+cv::Vec3f Renderer::printReflectance(const SceneObject& object, const ObjectFrame& frame,
+                                     const Eigen::Matrix3d& R, const RayRows& rays,
+                                     const CameraView& view, int u, int v,
+                                     const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
+                                     double t) {
+  // A tag's black is the face's colour this dark (ink on a matt face).
+  constexpr float kInk = 0.08f;
+  const cv::Vec2f& g = rays.row(v)[std::min(u + 1, view.width - 1)];
+  const double footprint_m = 2 * t * (cv::norm(g - rays.row(v)[u]) + 1e-3);
   for (const SceneTag& tag : object.tags) {
     const Eigen::Matrix3d& Rt = tag.rotation_object_tag;
     if (Rt.col(2).dot(inward) < 0.99) continue;  // on another face
-    const double half = tag.size_m / 2;
+    const cv::Mat& picture = tag.isMarker() ? tag.cells : tag.picture;
+    PicturePlane plane{tag.centre_m, Rt,
+                       tag.size_m,   tag.size_m * picture.rows / picture.cols,
+                       picture.cols, picture.rows};
     const Eigen::Vector3d q = Rt.transpose() * (p_box - tag.centre_m);
-    if (std::abs(q.x()) > half + footprint_m || std::abs(q.y()) > half + footprint_m) continue;
-    const double cell_m = tag.size_m / tag.cells.cols;
-    const Eigen::Vector3d n = Rt.col(2);
-    const double plane = n.dot(tag.centre_m - frame.oc_box);
-    constexpr int kSub = 4;
-    double white = 0;
-    for (int s = 0; s < kSub * kSub; ++s) {
-      const float su = (static_cast<float>(s % kSub) + 0.5f) / kSub - 0.5f;
-      const float sv = (static_cast<float>(s / kSub) + 0.5f) / kSub - 0.5f;
-      const cv::Vec2f r = rc + gx * su + gy * sv;
-      const Eigen::Vector3d db =
-          frame.box_to_head.transpose() * (R * Eigen::Vector3d(r[0], r[1], 1));
-      const double den = n.dot(db);
-      if (std::abs(den) < 1e-12) {
-        white += 1;
-        continue;
-      }
-      const Eigen::Vector3d qs =
-          Rt.transpose() * (frame.oc_box + (plane / den) * db - tag.centre_m);
-      const double col = std::floor((qs.x() + half) / cell_m),
-                   row = std::floor((qs.y() + half) / cell_m);
-      if (col < 0 || row < 0 || col >= tag.cells.cols || row >= tag.cells.rows) {
-        white += 1;
+    if (std::abs(q.x()) > plane.width_m / 2 + footprint_m ||
+        std::abs(q.y()) > plane.height_m / 2 + footprint_m) {
+      continue;
+    }
+    cv::Vec3f sum(0, 0, 0);
+    for (const cv::Point& c : subRayCells(frame, R, rays, view, u, v, plane)) {
+      if (c.x < 0) {
+        sum += cv::Vec3f(1, 1, 1);
+      } else if (tag.isMarker()) {
+        const float white = picture.at<uchar>(c) / 255.0f;
+        sum += cv::Vec3f::all(kInk + (1 - kInk) * white);
       } else {
-        white += tag.cells.at<uchar>(static_cast<int>(row), static_cast<int>(col)) / 255.0;
+        const cv::Vec3b& p = picture.at<cv::Vec3b>(c);
+        sum += cv::Vec3f(p[0], p[1], p[2]) * (1.0f / 255);
       }
     }
-    return white / (kSub * kSub);
+    return sum * (1.0f / (kSubRays * kSubRays));
   }
-  return 1;
+  return {1, 1, 1};
+}
+
+int64_t Renderer::drawPerson(const SceneObject& object, const ObjectFrame& frame, int32_t index,
+                             const CameraView& view, const RayRows& rays, int v0, int v1,
+                             cv::Mat* bgr) {
+  const cv::Rect& rect = frame.rect;
+  const Eigen::Matrix3d& R = view.rotation_head_camera;
+  const PicturePlane plane{Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity(),
+                           object.height_m / 2,     object.height_m,
+                           frame.picture.cols,      frame.picture.rows};
+  int64_t footprint = 0;
+  for (int v = v0; v < v1; ++v) {
+    const cv::Vec2f* ray_row = rays.row(v);
+    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+    float* out_depth = depth_.ptr<float>(v);
+    int32_t* out_owner = owner_.ptr<int32_t>(v);
+    for (int u = rect.x; u < rect.x + rect.width; ++u) {
+      const Eigen::Vector3d db =
+          frame.box_to_head.transpose() * (R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1));
+      if (std::abs(db.z()) < 1e-12) continue;
+      const double t = -frame.oc_box.z() / db.z();
+      if (t <= 0) continue;
+      const Eigen::Vector3d p = frame.oc_box + t * db;
+      const double margin_m = 0.02 * object.height_m;
+      if (std::abs(p.x()) > plane.width_m / 2 + margin_m ||
+          std::abs(p.y()) > plane.height_m / 2 + margin_m) {
+        continue;
+      }
+      // The pixel's size on the picture, in cells: small enough, and away from the outline, its
+      // centre's cell is the whole pixel's colour.
+      const int u1 = std::min(u + 1, view.width - 1);
+      const double pixel_cells =
+          t * cv::norm(ray_row[u1] - ray_row[u]) * plane.rows / plane.height_m;
+      const int col = static_cast<int>(std::floor((p.x() / plane.width_m + 0.5) * plane.cols));
+      const int row = static_cast<int>(std::floor((p.y() / plane.height_m + 0.5) * plane.rows));
+      cv::Vec4f sum(0, 0, 0, 0);
+      if (pixel_cells < kEdgeCells && col >= 0 && row >= 0 && col < plane.cols &&
+          row < plane.rows && frame.edge.at<uchar>(row, col) == 0) {
+        const cv::Vec4b& q = frame.picture.at<cv::Vec4b>(row, col);
+        sum = cv::Vec4f(q[0], q[1], q[2], q[3]) * (1.0f / 255);
+      } else {
+        for (const cv::Point& c : subRayCells(frame, R, rays, view, u, v, plane)) {
+          if (c.x < 0) continue;
+          const cv::Vec4b& q = frame.picture.at<cv::Vec4b>(c);
+          sum += cv::Vec4f(q[0], q[1], q[2], q[3]);
+        }
+        sum *= 1.0f / (kSubRays * kSubRays * 255);
+      }
+      if (sum[3] < 0.5f) {
+        if (sum[3] <= 0 || t >= out_depth[u]) continue;
+      } else {
+        ++footprint;
+        if (t >= out_depth[u]) continue;
+        out_depth[u] = static_cast<float>(t);
+        out_owner[u] = index;
+      }
+      // Premultiplied colours over what is there (the figure's edges are antialiased).
+      for (int k = 0; k < 3; ++k) {
+        out[u][k] = cv::saturate_cast<uchar>(255 * sum[k] + (1 - sum[3]) * out[u][k]);
+      }
+    }
+  }
+  return footprint;
 }
 
 int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
@@ -480,6 +572,9 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
   const cv::Rect& rect = frame.rect;
   const int v0 = std::max(rect.y, row0), v1 = std::min(rect.y + rect.height, row1);
   if (rect.empty() || v0 >= v1) return 0;
+  if (object.shape == SceneObject::Shape::kPerson) {
+    return drawPerson(object, frame, index, view, rays, v0, v1, bgr);
+  }
   int64_t footprint = 0;
   const Eigen::Matrix3d& R = view.rotation_head_camera;
   const Eigen::Vector3d& oc = frame.oc;
@@ -553,11 +648,11 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
         out[u] = out[u] * (0.5 + 0.5 * level);
       }
       if (!sphere && !object.tags.empty()) {
-        // A tag's black is the face's colour this dark (ink on a matt face).
-        constexpr double kInk = 0.08;
-        const double white =
-            tagWhiteFraction(object, frame, R, rays, view, u, v, oc_box + t * db, -n_box, t);
-        out[u] = out[u] * (kInk + (1 - kInk) * white);
+        const cv::Vec3f reflectance =
+            printReflectance(object, frame, R, rays, view, u, v, oc_box + t * db, -n_box, t);
+        for (int k = 0; k < 3; ++k) {
+          out[u][k] = cv::saturate_cast<uchar>(out[u][k] * reflectance[k]);
+        }
       }
     }
   }

@@ -4,10 +4,11 @@
 
 #include <opencv2/core.hpp>
 
+#include <array>
 #include <vector>
 
 #include "common/rig.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace ptz::sim {
 
@@ -66,7 +67,21 @@ class Renderer {
     cv::Rect rect;  // pixels its image may cover
     Eigen::Vector3d oc, oc_box;
     Eigen::Matrix3d box_to_head;
+    cv::Mat picture;  // a person's figure at this time: BGRA, colours premultiplied by alpha
+    cv::Mat edge;     // CV_8U: its cells within kEdgeCells of the figure's outline
   };
+  static constexpr int kEdgeCells = 8;
+  // A picture on a plane of an object's frame: its centre, its axes (columns x, y along the
+  // picture's columns and rows, z its normal) and its size.
+  struct PicturePlane {
+    Eigen::Vector3d centre_m;
+    Eigen::Matrix3d axes;
+    double width_m = 0, height_m = 0;
+    int cols = 0, rows = 0;
+  };
+  static constexpr int kSubRays = 4;  // a pixel's sub-rays through a picture, each way
+  // The picture's cells (x col, y row) the pixel (u, v)'s kSubRays^2 sub-rays meet, (-1, -1) off
+  // the picture. t: the central ray's length to the plane.
   BackgroundKey backgroundKey(const CameraView& view) const;
   static bool sameBackground(const BackgroundKey& a, const BackgroundKey& b);
   // Rows [row0, row1) of the background into bgr and background_depth_.
@@ -76,10 +91,21 @@ class Renderer {
   // the camera (hidden or not); where it is the nearest, owner_ becomes its index.
   int64_t drawObject(const SceneObject& object, const ObjectFrame& frame, int32_t index,
                      const CameraView& view, const RayRows& rays, int row0, int row1, cv::Mat* bgr);
-  double tagWhiteFraction(const SceneObject& object, const ObjectFrame& frame,
-                          const Eigen::Matrix3d& R, const RayRows& rays, const CameraView& view,
-                          int u, int v, const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
-                          double t);
+  static std::array<cv::Point, kSubRays * kSubRays> subRayCells(const ObjectFrame& frame,
+                                                                const Eigen::Matrix3d& R,
+                                                                const RayRows& rays,
+                                                                const CameraView& view, int u,
+                                                                int v, const PicturePlane& plane);
+  // The reflectance (1: white) of the prints on the box face the pixel (u, v) hits at p_box (box
+  // frame; inward: the face's inward normal; t: the ray's length); 1 where no print is near.
+  static cv::Vec3f printReflectance(const SceneObject& object, const ObjectFrame& frame,
+                                    const Eigen::Matrix3d& R, const RayRows& rays,
+                                    const CameraView& view, int u, int v,
+                                    const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
+                                    double t);
+  // A person's pixels in rows [row0, row1) (as drawObject).
+  int64_t drawPerson(const SceneObject& object, const ObjectFrame& frame, int32_t index,
+                     const CameraView& view, const RayRows& rays, int v0, int v1, cv::Mat* bgr);
   void drawChessboard(const CameraView& view, const RayRows& rays, const cv::Rect& rect, int row0,
                       int row1, cv::Mat* bgr);
 

@@ -59,10 +59,12 @@ void declareSimSceneParams(Params& p) {
                "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
                "texture_seed (7)");
   p.addSection("objects",
-               "list of {name, class, shape: sphere|box, radius_m | half_extents_m, yaw_rad and "
-               "yaw_rate_rad_s (box, about the head's y axis), pitch_rad and roll_rad (box, then "
-               "about its x and z), tags (box: [{family, id, size_m, centre_m, yaw_deg, "
-               "pitch_deg}], markers printed on its faces), color_bgr, "
+               "list of {name, class, shape: sphere|box|person, radius_m | half_extents_m | "
+               "height_m (person, 1.75), yaw_rad (box, person) and yaw_rate_rad_s (box, about the "
+               "head's y axis), pitch_rad and roll_rad (box, then about its x and z), tags (box: "
+               "[{family, id, size_m, centre_m, yaw_deg, pitch_deg}], markers printed on its "
+               "faces), prints (box: [{picture: face, size_m, centre_m, yaw_deg, pitch_deg}]), "
+               "color_bgr (a person's shirt), "
                "textured (0; 1: the colour modulated by the surface texture, for dense stereo), "
                "trajectory: static|line|circle|figure_eight|random_walk|arc, centre_m, "
                "amplitude_m, period_s, phase_rad, seed, arc_rad}");

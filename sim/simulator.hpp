@@ -11,7 +11,7 @@
 #include "common/plant.hpp"
 #include "common/rig.hpp"
 #include "sim/renderer.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace ptz::sim {
 

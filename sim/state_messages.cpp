@@ -56,16 +56,19 @@ ptzstereo::sim_truth_t makeTruthMessage(const Simulator& sim, const SimFrame& fr
     ptzstereo::sim_object_truth_t t{};
     t.name = o.name;
     t.class_name = o.class_name;
-    t.shape = o.shape == SceneObject::Shape::kSphere ? "sphere"
-              : o.tags.empty()                       ? "box"
-                                                     : "tagged_box";
+    t.shape = o.shape == SceneObject::Shape::kSphere   ? "sphere"
+              : o.shape == SceneObject::Shape::kPerson ? "person"
+              : o.hasMarkers()                         ? "tagged_box"
+                                                       : "box";
     const Eigen::Vector3d p = o.trajectory.position(frame.t_s);
     const Eigen::Vector3d v = o.trajectory.velocity(frame.t_s);
     for (int k = 0; k < 3; ++k) {
       t.position_m[k] = p[k];
       t.velocity_m_s[k] = v[k];
     }
-    t.radius_m = o.shape == SceneObject::Shape::kSphere ? o.radius_m : o.half_extents_m.maxCoeff();
+    t.radius_m = o.shape == SceneObject::Shape::kSphere   ? o.radius_m
+                 : o.shape == SceneObject::Shape::kPerson ? o.height_m / 2
+                                                          : o.half_extents_m.maxCoeff();
     const Eigen::Quaterniond q(o.rotationHeadObject(frame.t_s));
     t.orientation_wxyz[0] = q.w();
     t.orientation_wxyz[1] = q.x();

@@ -13,36 +13,6 @@
 namespace ptz::perception {
 namespace {
 
-cv::Mat grey(const cv::Mat& bgr) {
-  cv::Mat g;
-  if (bgr.channels() == 3) {
-    cv::cvtColor(bgr, g, cv::COLOR_BGR2GRAY);
-  } else {
-    g = bgr;
-  }
-  return g;
-}
-
-// The vertex of the parabola through (-1, a), (0, b), (1, c): a peak's sub-pixel offset.
-double vertex(double a, double b, double c) {
-  const double d = a - 2 * b + c;
-  return std::abs(d) < 1e-12 ? 0 : std::clamp(0.5 * (a - c) / d, -0.5, 0.5);
-}
-
-// The peak of a correlation map at loc, refined to a fraction of a pixel.
-cv::Point2d subPixel(const cv::Mat& r, cv::Point loc) {
-  double dx = 0, dy = 0;
-  if (loc.x > 0 && loc.x + 1 < r.cols) {
-    dx = vertex(r.at<float>(loc.y, loc.x - 1), r.at<float>(loc.y, loc.x),
-                r.at<float>(loc.y, loc.x + 1));
-  }
-  if (loc.y > 0 && loc.y + 1 < r.rows) {
-    dy = vertex(r.at<float>(loc.y - 1, loc.x), r.at<float>(loc.y, loc.x),
-                r.at<float>(loc.y + 1, loc.x));
-  }
-  return {loc.x + dx, loc.y + dy};
-}
-
 const CameraView& viewOf(Side s, const CameraView& left, const CameraView& right) {
   return s == Side::kLeft ? left : right;
 }
@@ -69,19 +39,19 @@ bool ClickedTracker::match(const cv::Mat& patch, const cv::Rect& wanted, const C
   cv::Mat pixels;
   if (!crop(rect, &pixels, why)) return false;
   cv::Mat r;
-  cv::matchTemplate(grey(pixels), patch, r, cv::TM_CCOEFF_NORMED);
+  cv::matchTemplate(greyOf(pixels), patch, r, cv::TM_CCOEFF_NORMED);
   double best = 0;
   cv::Point loc;
   cv::minMaxLoc(r, nullptr, &best, nullptr, &loc);
   *score = best;
-  *centre = cv::Point2d(rect.tl()) + subPixel(r, loc) +
+  *centre = cv::Point2d(rect.tl()) + subPixelPeak(r, loc) +
             cv::Point2d((patch.cols - 1) / 2.0, (patch.rows - 1) / 2.0);
   return true;
 }
 
 bool ClickedTracker::triangulated(const CameraView& left, const CameraView& right,
                                   const cv::Point2d& l, const cv::Point2d& r,
-                                  const cv::Size& patch_size, ClickedObject* out,
+                                  const cv::Size& patch_size, PatchObject* out,
                                   std::string* why) const {
   const Eigen::Vector2d lp(l.x, l.y), rp(r.x, r.y);
   double epipolar_px = 0;
@@ -99,6 +69,7 @@ bool ClickedTracker::triangulated(const CameraView& left, const CameraView& righ
     *why = "out of range (" + std::to_string(range_m) + " m)";
     return false;
   }
+  out->class_name = kClassName;
   out->position_m = p;
   out->covariance_m2 = triangulationCovariance(left, right, lp, rp, p_.pixel_sigma_px);
   out->radius_m = patch_size.width / 2.0 * range_m / left.intrinsics.fx;
@@ -108,7 +79,7 @@ bool ClickedTracker::triangulated(const CameraView& left, const CameraView& righ
 }
 
 bool ClickedTracker::start(Side side, const Eigen::Vector2d& pixel, const CropPixels crop[2],
-                           const CameraView& left, const CameraView& right, ClickedObject* first,
+                           const CameraView& left, const CameraView& right, PatchObject* first,
                            std::string* why) {
   stop();
   const CameraView& cv_ = viewOf(side, left, right);
@@ -124,97 +95,31 @@ bool ClickedTracker::start(Side side, const Eigen::Vector2d& pixel, const CropPi
   }
   cv::Mat pixels;
   if (!crop[s](rect, &pixels, why)) return false;
-  const cv::Mat patch = grey(pixels).clone();
+  const cv::Mat patch = greyOf(pixels).clone();
   cv::Scalar mean, stddev;
   cv::meanStdDev(patch, mean, stddev);
   if (stddev[0] < 4) {
     *why = "nothing to see under the click (a flat patch)";
     return false;
   }
-  // The click's ray through the other view, pixel by pixel from near to far.
   const Eigen::Vector2d centre(rect.x + (rect.width - 1) / 2.0, rect.y + (rect.height - 1) / 2.0);
-  const Eigen::Vector3d ray = pixelRay(cv_, centre);
-  // The patch as the other view sees it (its focal length may differ: another zoom).
-  patch_ = patch;
-  patch_fx_ = cv_.intrinsics.fx;
-  patch_range_m_ = 1;  // no range yet: scaled by the focal lengths alone
-  const cv::Mat other_patch = patchFor(ov.intrinsics.fx, 1);
-  const int other_half = other_patch.cols / 2 + 1;
-  std::vector<cv::Point2d> line;
-  for (double r = p_.min_range_m; r < p_.max_range_m; r *= 1.002) {
-    const Eigen::Vector2d q = ov.project(cv_.position_head_m + r * ray);
-    if (!q.allFinite() || q.x() < other_half || q.y() < other_half ||
-        q.x() > ov.width - 1 - other_half || q.y() > ov.height - 1 - other_half) {
-      continue;
-    }
-    if (line.empty() || std::hypot(q.x() - line.back().x, q.y() - line.back().y) >= 0.5) {
-      line.emplace_back(q.x(), q.y());
-    }
-  }
-  if (line.empty()) {
-    stop();
-    *why = "the click's epipolar line is not in the other image";
+  EpipolarMatch found;
+  if (!matchAlongEpipolar(patch, centre, cv_, ov, crop[o], p_.min_range_m, p_.max_range_m, &found,
+                          why)) {
     return false;
   }
-  cv::Rect band = cv::boundingRect(std::vector<cv::Point>(line.begin(), line.end()));
-  const int reach = other_patch.cols / 2 + 4;
-  band = cv::Rect(band.x - reach, band.y - reach, band.width + 2 * reach, band.height + 2 * reach) &
-         cv::Rect(0, 0, ov.width, ov.height);
-  // matchTemplate needs the band at least the patch's size both ways (else it swaps them).
-  if (band.width < other_patch.cols || band.height < other_patch.rows) {
-    stop();
-    *why = "the other view's patch does not fit along its epipolar line";
+  if (found.best < p_.min_start_score) {
+    *why = "not found in the other view (best correlation " + std::to_string(found.best) + ")";
     return false;
   }
-  cv::Mat other_pixels;
-  if (!crop[o](band, &other_pixels, why)) {
-    stop();
+  if (found.best - found.second < p_.unique_margin) {
+    *why = "two places alike along the other view's epipolar line (" + std::to_string(found.best) +
+           ", " + std::to_string(found.second) + ")";
     return false;
   }
-  cv::Mat r;
-  cv::matchTemplate(grey(other_pixels), other_patch, r, cv::TM_CCOEFF_NORMED);
-  const cv::Point2d offset = cv::Point2d(band.tl()) + cv::Point2d((other_patch.cols - 1) / 2.0,
-                                                                  (other_patch.rows - 1) / 2.0);
-  // Along the line: the best place, and the best one farther than half a patch from it.
-  double best = -2, second = -2;
-  cv::Point best_at(-1, -1);
-  std::vector<std::pair<double, cv::Point>> scores;
-  for (const auto& q : line) {
-    const cv::Point at(static_cast<int>(std::lround(q.x - offset.x)),
-                       static_cast<int>(std::lround(q.y - offset.y)));
-    if (at.x < 0 || at.y < 0 || at.x >= r.cols || at.y >= r.rows) continue;
-    const double v = r.at<float>(at);
-    scores.emplace_back(v, at);
-    if (v > best) best = v, best_at = at;
-  }
-  for (const auto& [v, at] : scores) {
-    if (cv::norm(at - best_at) > half) second = std::max(second, v);
-  }
-  if (best < p_.min_start_score) {
-    stop();
-    *why = "not found in the other view (best correlation " + std::to_string(best) + ")";
-    return false;
-  }
-  if (best - second < p_.unique_margin) {
-    stop();
-    *why = "two places alike along the other view's epipolar line (" + std::to_string(best) + ", " +
-           std::to_string(second) + ")";
-    return false;
-  }
-  // The peak near the line's best, in both directions (the line is drawn to half a pixel).
-  cv::Point peak = best_at;
-  for (int dy = -2; dy <= 2; ++dy) {
-    for (int dx = -2; dx <= 2; ++dx) {
-      const cv::Point at = best_at + cv::Point(dx, dy);
-      if (at.x >= 0 && at.y >= 0 && at.x < r.cols && at.y < r.rows &&
-          r.at<float>(at) > r.at<float>(peak)) {
-        peak = at;
-      }
-    }
-  }
-  const cv::Point2d other_centre = offset + subPixel(r, peak);
+  const cv::Point2d other_centre = found.centre;
   const cv::Point2d click_centre(centre.x(), centre.y());
-  ClickedObject obj;
+  PatchObject obj;
   const cv::Point2d& l = side == Side::kLeft ? click_centre : other_centre;
   const cv::Point2d& rr = side == Side::kLeft ? other_centre : click_centre;
   if (!triangulated(left, right, l, rr, patch.size(), &obj, why)) {
@@ -222,21 +127,23 @@ bool ClickedTracker::start(Side side, const Eigen::Vector2d& pixel, const CropPi
     return false;
   }
   obj.score[s] = 1;
-  obj.score[o] = best;
+  obj.score[o] = found.best;
   obj.box[s] = rect;
   obj.box[o] =
-      cv::Rect(static_cast<int>(std::lround(other_centre.x - (other_patch.cols - 1) / 2.0)),
-               static_cast<int>(std::lround(other_centre.y - (other_patch.rows - 1) / 2.0)),
-               other_patch.cols, other_patch.rows);
+      cv::Rect(static_cast<int>(std::lround(other_centre.x - (found.patch_size.width - 1) / 2.0)),
+               static_cast<int>(std::lround(other_centre.y - (found.patch_size.height - 1) / 2.0)),
+               found.patch_size.width, found.patch_size.height);
+  patch_ = patch;
+  patch_fx_ = cv_.intrinsics.fx;
   patch_range_m_ = (obj.position_m - cv_.position_head_m).norm();
   last_m_ = obj.position_m;
   *first = obj;
   return true;
 }
 
-std::optional<ClickedObject> ClickedTracker::find(const Track* track, double t_s,
-                                                  const CropPixels crop[2], const CameraView& left,
-                                                  const CameraView& right, std::string* why) {
+std::optional<PatchObject> ClickedTracker::find(const Track* track, double t_s,
+                                                const CropPixels crop[2], const CameraView& left,
+                                                const CameraView& right, std::string* why) {
   if (!active()) {
     *why = "no model";
     return std::nullopt;
@@ -249,7 +156,7 @@ std::optional<ClickedObject> ClickedTracker::find(const Track* track, double t_s
     sigma_m = std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
   }
   const CameraView* views[2] = {&left, &right};
-  ClickedObject obj;
+  PatchObject obj;
   cv::Point2d at[2];
   cv::Size patch_size;
   for (int s = 0; s < 2; ++s) {

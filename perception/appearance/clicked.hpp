@@ -13,6 +13,7 @@
 #include <string>
 
 #include "common/rig.hpp"
+#include "perception/appearance/epipolar_match.hpp"
 #include "perception/detection/windows.hpp"
 #include "perception/tracking/tracker.hpp"
 
@@ -29,15 +30,6 @@ struct ClickedParams {
   double min_range_m = 0.3, max_range_m = 50;
 };
 
-struct ClickedObject {
-  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  // head frame
-  Eigen::Matrix3d covariance_m2 = Eigen::Matrix3d::Zero();
-  double radius_m = 0;
-  cv::Point2d pixel[2];  // each view's match, distorted image coordinates
-  cv::Rect box[2];       // each view's patch
-  double score[2] = {0, 0};
-};
-
 class ClickedTracker {
  public:
   static constexpr const char* kClassName = "clicked";
@@ -48,8 +40,7 @@ class ClickedTracker {
   // leaves the image, the patch is flat (nothing to match), no match or two alike along the line,
   // out of range, or a crop fails.
   bool start(Side side, const Eigen::Vector2d& pixel, const CropPixels crop[2],
-             const CameraView& left, const CameraView& right, ClickedObject* first,
-             std::string* why);
+             const CameraView& left, const CameraView& right, PatchObject* first, std::string* why);
   bool active() const { return !patch_.empty(); }
   void stop() { patch_.release(); }
 
@@ -57,9 +48,9 @@ class ClickedTracker {
   // the model, predicted to t_s; none: where it was last found) is seen; none when either view's
   // best match is under min_score, the two are not on each other's epipolar lines, or the range is
   // out of bounds. *why says which.
-  std::optional<ClickedObject> find(const Track* track, double t_s, const CropPixels crop[2],
-                                    const CameraView& left, const CameraView& right,
-                                    std::string* why);
+  std::optional<PatchObject> find(const Track* track, double t_s, const CropPixels crop[2],
+                                  const CameraView& left, const CameraView& right,
+                                  std::string* why);
 
  private:
   // The patch scaled for a view with focal length fx at range_m.
@@ -68,7 +59,7 @@ class ClickedTracker {
   bool match(const cv::Mat& patch, const cv::Rect& rect, const CropPixels& crop, cv::Size image,
              cv::Point2d* centre, double* score, std::string* why) const;
   bool triangulated(const CameraView& left, const CameraView& right, const cv::Point2d& l,
-                    const cv::Point2d& r, const cv::Size& patch_size, ClickedObject* out,
+                    const cv::Point2d& r, const cv::Size& patch_size, PatchObject* out,
                     std::string* why) const;
 
   ClickedParams p_;

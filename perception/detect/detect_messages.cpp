@@ -48,9 +48,9 @@ ptzstereo::detection_2d_t toMessage(const MarkerSighting& s, const std::string& 
   return d;
 }
 
-ptzstereo::detection_2d_t toMessage(const ClickedObject& o, int side) {
+ptzstereo::detection_2d_t toMessage(const PatchObject& o, int side) {
   ptzstereo::detection_2d_t d{};
-  d.class_name = ClickedTracker::kClassName;
+  d.class_name = o.class_name;
   d.centroid_x_px = o.pixel[side].x;
   d.centroid_y_px = o.pixel[side].y;
   d.area_px2 = o.box[side].area();
@@ -62,9 +62,9 @@ ptzstereo::detection_2d_t toMessage(const ClickedObject& o, int side) {
   return d;
 }
 
-ptzstereo::object_3d_t toMessage(const ClickedObject& o, int left_index, int right_index) {
+ptzstereo::object_3d_t toMessage(const PatchObject& o, int left_index, int right_index) {
   ptzstereo::object_3d_t obj{};
-  obj.class_name = ClickedTracker::kClassName;
+  obj.class_name = o.class_name;
   for (int r = 0; r < 3; ++r) obj.position_m[r] = o.position_m[r];
   copyMatrix(o.covariance_m2, obj.covariance_m2);
   obj.left_index = left_index;

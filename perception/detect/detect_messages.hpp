@@ -31,10 +31,11 @@ ptzstereo::object_track_t toMessage(const Track& t, double now_s, const TrackerP
 // A tag seen in one view as a detection of its object ("<class>#<id>" or the bundle's name): the
 // tag's centre, the area and box of its four corners, shape_distance 0, matched to none yet.
 ptzstereo::detection_2d_t toMessage(const MarkerSighting& s, const std::string& object_name);
-// The clicked object's patch in view `side` (0 left, 1 right) as a detection of class "clicked".
-ptzstereo::detection_2d_t toMessage(const ClickedObject& o, int side);
-// The clicked object (no orientation) with its detections' indices.
-ptzstereo::object_3d_t toMessage(const ClickedObject& o, int left_index, int right_index);
+// An object seen as a patch in both views (the clicked object, a face, a person): its patch in
+// view `side` (0 left, 1 right) as a detection of its class.
+ptzstereo::detection_2d_t toMessage(const PatchObject& o, int side);
+// Such an object (no orientation) with its detections' indices.
+ptzstereo::object_3d_t toMessage(const PatchObject& o, int left_index, int right_index);
 // A tagged object: its pose (position and rotation with their covariances) and the detection
 // indices of its first tag in each view (-1: not seen there).
 ptzstereo::object_3d_t toMessage(const MarkerObject& o, int left_index, int right_index);

@@ -139,6 +139,26 @@ void declareDetectParams(Params& p) {
   p.add("click_min_score", k.min_score, "",
         "click to track: a frame's match in each view needs this normalised correlation",
         Range::between(0, 1));
+  const PeopleScanParams pp;
+  p.add("people_config", "",
+        "a YAML file whose section `people` lists the face and person classes, instead of the "
+        "config file's own (\"\": the config file's; none there: none)");
+  p.add("people_strips", pp.strips, "",
+        "faces and people: the left image is searched for new ones in this many vertical strips, "
+        "one a frame (tracked ones every frame in windows around their tracks)",
+        Range::between(1, 64));
+  p.add("people_min_score", pp.min_score, "",
+        "faces and people: a detection's inner patch must match the right view along its "
+        "epipolar line with this normalised correlation",
+        Range::between(0, 1));
+  p.add("people_size_tolerance", pp.size_tolerance, "",
+        "faces and people: a detection whose box is further than this share from the class's "
+        "height_m at its range is refused (a picture of a face, a false hit on the backdrop)",
+        Range::between(0.05, 2));
+  p.addSection("people",
+               "list of {name, detector: hog|cascade, cascade: a Debian opencv-data cascade's "
+               "name (default haarcascade_frontalface_default) or a YAML file, height_m, "
+               "scan_scale, min_neighbors}");
   p.addSection(
       "markers",
       "list of {name, detector: apriltag|aruco, family (apriltag_36h11, aruco_4x4_50, ...), "
@@ -203,6 +223,26 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
     }
     c.markers = markerClassesFromConfig(fs["markers"], "markers file '" + markers_path + "'");
   }
+  const std::string people_path = p.getString("people_config");
+  if (people_path.empty()) {
+    c.people = peopleClassesFromConfig(p.section("people"), "config file '" + p.configPath() + "'");
+  } else {
+    const cv::FileStorage fs = openForRead(people_path, "people file");
+    if (fs["people"].empty()) {
+      throw ConfigError("people file '" + people_path + "': no section `people`");
+    }
+    c.people = peopleClassesFromConfig(fs["people"], "people file '" + people_path + "'");
+  }
+  for (const auto& person : c.people) {
+    const bool colour = std::any_of(c.detector.classes.begin(), c.detector.classes.end(),
+                                    [&](const auto& k) { return k.name == person.name; });
+    const bool marker = std::any_of(c.markers.begin(), c.markers.end(),
+                                    [&](const auto& k) { return k.name == person.name; });
+    if (colour || marker || person.name == ClickedTracker::kClassName) {
+      throw ConfigError("config file '" + p.configPath() + "', people: class '" + person.name +
+                        "' is also a colour or marker class, or reserved (clicked)");
+    }
+  }
   for (const auto& colour : c.detector.classes) {
     if (colour.name == ClickedTracker::kClassName || colour.name.find('#') != std::string::npos) {
       throw ConfigError("config file '" + p.configPath() + "', classes: '" + colour.name +
@@ -223,8 +263,10 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   }
   c.target_class = p.getString("target_class");
   const std::vector<std::string> names = markerObjectNames(c.markers);
+  const bool person_class = std::any_of(c.people.begin(), c.people.end(),
+                                        [&](const auto& k) { return k.name == c.target_class; });
   if (std::find(names.begin(), names.end(), c.target_class) == names.end() &&
-      c.target_class != ClickedTracker::kClassName) {
+      c.target_class != ClickedTracker::kClassName && !person_class) {
     checkTargetClass(p, c.detector);
   }
   c.marker_scan.bands = p.getInt("marker_bands");
@@ -235,6 +277,11 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.marker_scan.pose.min_range_m = p.getDouble("min_range_m");
   c.marker_scan.pose.max_range_m = p.getDouble("max_range_m");
   c.marker_scan.detector.max_hamming = p.getInt("marker_max_hamming");
+  c.people_scan.strips = p.getInt("people_strips");
+  c.people_scan.min_score = p.getDouble("people_min_score");
+  c.people_scan.size_tolerance = p.getDouble("people_size_tolerance");
+  c.people_scan.min_range_m = p.getDouble("min_range_m");
+  c.people_scan.max_range_m = p.getDouble("max_range_m");
   c.click_to_track = p.getBool("click_to_track");
   c.clicked.patch_px = p.getInt("click_patch_px");
   c.clicked.min_score = p.getDouble("click_min_score");

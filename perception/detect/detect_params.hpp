@@ -12,13 +12,14 @@
 #include "perception/detection/stereo.hpp"
 #include "perception/detection/windows.hpp"
 #include "perception/markers/marker_scan.hpp"
+#include "perception/people/people_scan.hpp"
 #include "perception/tracking/tracker.hpp"
 
 namespace ptz::perception {
 
 // Declares target_class .. full_scan_max_width_px, the freshness of frames (frame_*) and of
-// TARGET_SELECT requests (select_*), the markers' (marker_*), and the config file's sections
-// `classes` and `markers`.
+// TARGET_SELECT requests (select_*), the markers' (marker_*), the faces' and people's (people_*),
+// and the config file's sections `classes`, `markers` and `people`.
 void declareDetectParams(Params& p);
 
 // The tracker's parameters from track_*.
@@ -45,6 +46,9 @@ struct DetectConfig {
   // A point on no track starts a model of what is under it (appearance/clicked.hpp).
   bool click_to_track = true;
   ClickedParams clicked;
+  // Faces and people (the config file's section `people`; none: not scanned for).
+  std::vector<PeopleClass> people;
+  PeopleScanParams people_scan;
 
   // From parsed parameters. The classes come from the config file, which is therefore required;
   // throws ConfigError naming the file, flag or field (no config file, a class's field, an even

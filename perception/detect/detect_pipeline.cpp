@@ -11,12 +11,15 @@
 namespace ptz::perception {
 namespace {
 
-// The colour classes, then every tagged object's name (TARGET_SELECT may name either).
+// The colour classes, every tagged object's name, the faces' and people's classes (TARGET_SELECT
+// may name any).
 std::vector<std::string> classNames(const DetectorParams& dp,
-                                    const std::vector<MarkerClass>& markers) {
+                                    const std::vector<MarkerClass>& markers,
+                                    const std::vector<PeopleClass>& people) {
   std::vector<std::string> names;
   for (const auto& c : dp.classes) names.push_back(c.name);
   for (const auto& n : markerObjectNames(markers)) names.push_back(n);
+  for (const auto& c : people) names.push_back(c.name);
   names.push_back(ClickedTracker::kClassName);
   return names;
 }
@@ -34,9 +37,9 @@ TrackMeasurement markerMeasurement(const MarkerObject& o, int object_index) {
   return m;
 }
 
-TrackMeasurement clickedMeasurement(const ClickedObject& o, int object_index) {
+TrackMeasurement patchMeasurement(const PatchObject& o, int object_index) {
   TrackMeasurement m;
-  m.class_name = ClickedTracker::kClassName;
+  m.class_name = o.class_name;
   m.position_m = o.position_m;
   m.covariance_m2 = o.covariance_m2;
   m.radius_m = o.radius_m;
@@ -51,10 +54,11 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
       rig_(std::move(rig)),
       detector_(config_.detector),
       tracker_(config_.tracker),
-      class_names_(classNames(detector_.params(), config_.markers)),
+      class_names_(classNames(detector_.params(), config_.markers, config_.people)),
       selector_(config_.target_class, class_names_, config_.pick_radius_px),
       windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()),
       markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}),
+      people_(config_.people, config_.people_scan, {rig_.left.width, rig_.left.height}),
       clicked_(config_.clicked) {}
 
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
@@ -117,7 +121,21 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
           markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
     }
   }
-  std::optional<ClickedObject> clicked;
+  // Faces and people: found in the left view's windows and strip, ranged in the right.
+  std::vector<PatchObject> people;
+  if (people_.enabled()) {
+    try {
+      if (!people_.scan(tracker_.tracks(), t_s, lv, rv, crops, &people, why)) return false;
+    } catch (const cv::Exception& e) {
+      people.clear();
+      ++counters_["people_errors"];
+    }
+    for (size_t i = 0; i < people.size(); ++i) {
+      measurements.push_back(patchMeasurement(
+          people[i], static_cast<int>(objects.size() + markers.objects.size() + i)));
+    }
+  }
+  std::optional<PatchObject> clicked;
   try {
     clicked = clickedObject(m.seq, t_s, crops, lv, rv, out);
   } catch (const cv::Exception& e) {
@@ -126,8 +144,8 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     out->click_note = std::string("the click's model failed: ") + e.what();
   }
   if (clicked) {
-    measurements.push_back(
-        clickedMeasurement(*clicked, static_cast<int>(objects.size() + markers.objects.size())));
+    measurements.push_back(patchMeasurement(
+        *clicked, static_cast<int>(objects.size() + markers.objects.size() + people.size())));
   }
   const std::vector<ViewMeasurement> one_view = viewMeasurements(
       objects, lr, rr, lv, rv, class_names_, config_.stereo.pixel_sigma_px, tracker_.tracks(), t_s);
@@ -138,7 +156,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   processing_ms_.push_back(
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, clicked, lv, out);
+  makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, people, clicked, lv, out);
   setCounters(target_id, out->pose.target_index);
   return true;
 }
@@ -147,7 +165,8 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
                                   const std::vector<Region>& lr, const std::vector<Region>& rr,
                                   const std::vector<StereoObject>& objects,
                                   const std::vector<BoxYaw>& yaws, const MarkerScan& markers,
-                                  const std::optional<ClickedObject>& clicked, const CameraView& lv,
+                                  const std::vector<PatchObject>& people,
+                                  const std::optional<PatchObject>& clicked, const CameraView& lv,
                                   FrameOutputs* out) const {
   ptzstereo::object_detections_t& det = out->detections;
   det = {};
@@ -197,14 +216,19 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
       }
     }
   }
-  // The clicked object: its patch in each view, matched, after the tags.
-  const int clicked_left = clicked ? static_cast<int>(det.left.size()) : -1;
-  const int clicked_right = clicked ? static_cast<int>(det.right.size()) : -1;
-  if (clicked) {
-    det.left.push_back(toMessage(*clicked, 0));
-    det.right.push_back(toMessage(*clicked, 1));
-    det.left.back().match_index = clicked_right;
-    det.right.back().match_index = clicked_left;
+  // Faces, people and the clicked object: each one's box or patch in each view, matched, after
+  // the tags.
+  std::vector<const PatchObject*> patches;
+  for (const auto& o : people) patches.push_back(&o);
+  if (clicked) patches.push_back(&*clicked);
+  std::vector<std::pair<int, int>> patch_indices;
+  for (const PatchObject* o : patches) {
+    const int l = static_cast<int>(det.left.size()), r = static_cast<int>(det.right.size());
+    det.left.push_back(toMessage(*o, 0));
+    det.right.push_back(toMessage(*o, 1));
+    det.left.back().match_index = r;
+    det.right.back().match_index = l;
+    patch_indices.emplace_back(l, r);
   }
   det.num_left = static_cast<int32_t>(det.left.size());
   det.num_right = static_cast<int32_t>(det.right.size());
@@ -213,7 +237,9 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
     const int r = o.sightings[1].empty() ? -1 : static_cast<int>(first_right) + o.sightings[1][0];
     pose.objects.push_back(toMessage(o, l, r));
   }
-  if (clicked) pose.objects.push_back(toMessage(*clicked, clicked_left, clicked_right));
+  for (size_t i = 0; i < patches.size(); ++i) {
+    pose.objects.push_back(toMessage(*patches[i], patch_indices[i].first, patch_indices[i].second));
+  }
   // The target's object: the measurement that updated the locked track in this frame; or, when
   // one view alone did, the track as it now is (the other view's index -1).
   if (const Track* target = tracker_.find(target_id)) {
@@ -250,6 +276,7 @@ void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
   counters_["track_rotations_accepted"] = tracker_.rotationsAccepted();
   counters_["track_rotations_refused"] = tracker_.rotationsRefused();
   for (const auto& [name, n] : markers_.counts()) counters_[name] = n;
+  for (const auto& [name, n] : people_.counts()) counters_[name] = n;
   counters_["target_id"] = target_id;
   for (const auto& [reason, n] : tracker_.untrustedCounts()) counters_["untrusted_" + reason] = n;
   for (const auto& [name, n] : windows_.counts()) counters_[name] = n;
@@ -328,11 +355,10 @@ std::vector<BoxYaw> DetectPipeline::estimateYaws(const ptzstereo::stereo_frame_t
   return yaws;
 }
 
-std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t_s,
-                                                           const CropPixels crops[2],
-                                                           const CameraView& lv,
-                                                           const CameraView& rv,
-                                                           FrameOutputs* out) {
+std::optional<PatchObject> DetectPipeline::clickedObject(int64_t seq, double t_s,
+                                                         const CropPixels crops[2],
+                                                         const CameraView& lv, const CameraView& rv,
+                                                         FrameOutputs* out) {
   std::string why;
   if (pending_click_) {
     const auto [side, direction] = *pending_click_;
@@ -340,7 +366,7 @@ std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t
     // Where the click's direction is now: the heads turn about their pivots, so a far point of it.
     const CameraView& view = side == Side::kLeft ? lv : rv;
     const Eigen::Vector2d pixel = view.project(view.position_head_m + 100 * direction);
-    ClickedObject first;
+    PatchObject first;
     if (!clicked_.start(side, pixel, crops, lv, rv, &first, &why)) {
       ++counters_["click_models_refused"];
       out->click_note =
@@ -365,7 +391,7 @@ std::optional<ClickedObject> DetectPipeline::clickedObject(int64_t seq, double t
   for (const Track& t : tracker_.tracks()) {
     if (t.class_name == ClickedTracker::kClassName) track = &t;
   }
-  std::optional<ClickedObject> found = clicked_.find(track, t_s, crops, lv, rv, &why);
+  std::optional<PatchObject> found = clicked_.find(track, t_s, crops, lv, rv, &why);
   if (found) {
     clicked_seen_s_ = t_s;
     return found;

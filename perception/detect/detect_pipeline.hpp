@@ -3,7 +3,8 @@
 // stereo pairs triangulated, the boxes' yaws, the tracker's update and the target's choice, as the
 // three messages ptz-detect publishes; and TARGET_SELECT requests. Tagged objects (fiducial
 // markers, marker_scan.hpp) join the colour objects: their detections, objects and tracks follow
-// the colour ones' in each message. The main checks what comes in
+// the colour ones' in each message, then faces and people (people_scan.hpp), then a clicked
+// object. The main checks what comes in
 // (FrameIntake, FreshnessGate), publishes what comes out and copies counters() into its status.
 #pragma once
 
@@ -83,9 +84,9 @@ class DetectPipeline {
   // The selector's choice after this frame's tracker update; *reason_changed when its reason did.
   int64_t chooseTarget(double t_s, bool* reason_changed);
   // The clicked object of this frame: a pending click's model started, or the model's object found.
-  std::optional<ClickedObject> clickedObject(int64_t seq, double t_s, const CropPixels crops[2],
-                                             const CameraView& lv, const CameraView& rv,
-                                             FrameOutputs* out);
+  std::optional<PatchObject> clickedObject(int64_t seq, double t_s, const CropPixels crops[2],
+                                           const CameraView& lv, const CameraView& rv,
+                                           FrameOutputs* out);
   // After a request met by another target: a pending click is forgotten, and the clicked object's
   // model dropped unless the target is still of its class.
   void settleClick();
@@ -93,8 +94,9 @@ class DetectPipeline {
   void makeMessages(const ptzstereo::stereo_frame_t& m, double t_s, int64_t target_id,
                     const std::vector<Region>& lr, const std::vector<Region>& rr,
                     const std::vector<StereoObject>& objects, const std::vector<BoxYaw>& yaws,
-                    const MarkerScan& markers, const std::optional<ClickedObject>& clicked,
-                    const CameraView& lv, FrameOutputs* out) const;
+                    const MarkerScan& markers, const std::vector<PatchObject>& people,
+                    const std::optional<PatchObject>& clicked, const CameraView& lv,
+                    FrameOutputs* out) const;
   void setCounters(int64_t target_id, int64_t target_index);
 
   DetectConfig config_;
@@ -105,6 +107,7 @@ class DetectPipeline {
   TargetSelector selector_;
   WindowScanner windows_;
   MarkerScanner markers_;
+  PeopleScanner people_;
   ClickedTracker clicked_;
   // A click on no track, waiting for the next frame's pixels to start a model: its camera and the
   // head-frame direction of its pixel in the frame it was made on (the heads may turn meanwhile).

@@ -13,6 +13,7 @@
 # - scripts/demo --head onvif: ptz-sim's ONVIF cameras driven by ptz-driver close the loop
 #   (ptz-driver's PTZ_STATE, the cameras' setpoints applied, no head errors); a bad --head refused;
 # - scripts/demo --scene markers --private-net: the tagged cube followed with its orientation.
+# - scripts/demo --scene people --private-net: the walking person followed.
 #   test_scripts.sh SOURCE_DIR BUILD_DIR
 set -uo pipefail
 src=$1 build=$2
@@ -232,7 +233,7 @@ echo "demo --head onvif: ${states:-0} PTZ_STATE from ptz-driver, centring ${cent
 echo "== scripts/demo --scene markers: the tagged cube followed by its tags, its whole orientation"
 out=$("$src/scripts/demo" --no-build --scene balloons 2>&1)
 rc=$?
-[ $rc -eq 2 ] && grep -q "scene must be default or markers" <<<"$out" ||
+[ $rc -eq 2 ] && grep -q "scene must be default, markers or people" <<<"$out" ||
   bad "demo --scene balloons: exit $rc, not refused: $(tail -3 <<<"$out")"
 # --private-net: the scene must survive the script's re-exec into its namespace.
 out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --scene markers --private-net \
@@ -246,6 +247,19 @@ orientation=$(sed -n 's/^ *"orientation_error_rms_deg": \([0-9.]*\).*/\1/p' \
 awk -v o="${orientation:-99}" 'BEGIN {exit !(o < 2)}' ||
   bad "demo --scene markers: orientation ${orientation:-?} deg RMS"
 echo "demo --scene markers: ${samples:-0} poses with the cube's orientation, ${orientation:-?} deg RMS"
+
+echo "== scripts/demo --scene people: the walking person found by HOG and followed"
+out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --scene people --private-net \
+  --out "$work/demo-people" 2>&1)
+rc=$?
+[ $rc -eq 0 ] || bad "demo --scene people exits $rc: $(tail -5 <<<"$out")"
+error=$(sed -n 's/^ *"position_error_rms_pct_of_range": \([0-9.]*\).*/\1/p' \
+  "$work/demo-people/summary.json")
+lost=$(sed -n 's/^ *"target_lost_s": \([0-9.]*\).*/\1/p' "$work/demo-people/summary.json")
+awk -v e="${error:-99}" 'BEGIN {exit !(e < 8)}' ||
+  bad "demo --scene people: position error ${error:-?} % of range"
+awk -v l="${lost:-99}" 'BEGIN {exit !(l < 2)}' || bad "demo --scene people: target lost ${lost:-?} s"
+echo "demo --scene people: the person at ${error:-?} % of range RMS, lost ${lost:-?} s"
 
 [ $fail -eq 0 ] && echo "PASSED"
 exit $fail

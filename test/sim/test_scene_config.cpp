@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "common/config.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 #include "support/run_program.hpp"
 
 namespace {

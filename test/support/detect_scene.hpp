@@ -9,7 +9,7 @@
 #include "perception/detection/detector.hpp"
 #include "perception/detection/windows.hpp"
 #include "perception/jpeg/jpeg_window.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace ptz::test {
 

@@ -1,12 +1,14 @@
 // A still stereo frame of a scene with both cameras aimed at a point, as ptz-sim sends it (its
-// pixel noise, JPEG q90 and back): motors that reach their setpoint at once.
+// pixel noise, JPEG q90 and back): motors that reach their setpoint at once; crops of it.
 #pragma once
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
+#include "perception/detection/windows.hpp"
 #include "sim/simulator.hpp"
 
 namespace ptz::test {
@@ -43,5 +45,28 @@ inline AimedFrame renderAimed(const StereoRig& rig, const sim::Scene& scene,
   return {jpegRoundTrip(f.left), jpegRoundTrip(f.right), rig.view(Side::kLeft, f.left_pose),
           rig.view(Side::kRight, f.right_pose)};
 }
+
+// Both cameras at home (the rig's default) looking at the scene at time t_s.
+inline AimedFrame renderAtHome(const sim::Scene& scene, double t_s) {
+  sim::Simulator s(StereoRig::makeDefault(), scene, defaultPlantParams(), 2.0, 3);
+  s.advanceTo(t_s);
+  const sim::SimFrame f = s.capture();
+  const StereoRig rig = StereoRig::makeDefault();
+  return {jpegRoundTrip(f.left), jpegRoundTrip(f.right), rig.view(Side::kLeft, f.left_pose),
+          rig.view(Side::kRight, f.right_pose)};
+}
+
+// Crops of a frame's two images, as ptz-detect's FramePixels gives them.
+struct FrameCrops {
+  cv::Mat images[2];
+  perception::CropPixels crop[2] = {[this](const cv::Rect& r, cv::Mat* out, std::string*) {
+                                      *out = images[0](r).clone();
+                                      return true;
+                                    },
+                                    [this](const cv::Rect& r, cv::Mat* out, std::string*) {
+                                      *out = images[1](r).clone();
+                                      return true;
+                                    }};
+};
 
 }  // namespace ptz::test

@@ -15,7 +15,7 @@
 #include "control/prediction/turn_kalman.hpp"
 #include "control/stability/stability.hpp"
 #include "control/stability/track_analysis.hpp"
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 namespace pc = ptz::control;
 

@@ -32,29 +32,6 @@ sim::SceneObject plate(const std::string& name, const Eigen::Vector3d& centre, b
   return o;
 }
 
-// Crops of a frame's two images (what ptz-detect's FramePixels gives).
-struct Crops {
-  cv::Mat images[2];
-  perception::CropPixels crop[2] = {[this](const cv::Rect& r, cv::Mat* out, std::string*) {
-                                      *out = images[0](r).clone();
-                                      return true;
-                                    },
-                                    [this](const cv::Rect& r, cv::Mat* out, std::string*) {
-                                      *out = images[1](r).clone();
-                                      return true;
-                                    }};
-};
-
-// Both cameras at home (the rig's default) looking at the scene at time t_s.
-ptz::test::AimedFrame atHome(const sim::Scene& scene, double t_s) {
-  sim::Simulator s(ptz::StereoRig::makeDefault(), scene, ptz::defaultPlantParams(), 2.0, 3);
-  s.advanceTo(t_s);
-  const sim::SimFrame f = s.capture();
-  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
-  return {ptz::test::jpegRoundTrip(f.left), ptz::test::jpegRoundTrip(f.right),
-          rig.view(Side::kLeft, f.left_pose), rig.view(Side::kRight, f.right_pose)};
-}
-
 }  // namespace
 
 TEST(Clicked, StartsOnATexturedPlateAndFollowsIt) {
@@ -64,13 +41,13 @@ TEST(Clicked, StartsOnATexturedPlateAndFollowsIt) {
   scene.objects[0].trajectory.amplitude_m = {0.5, 0.1, 0.2};
   scene.objects[0].trajectory.period_s = 8;
   perception::ClickedTracker tracker;
-  Crops c;
-  ptz::test::AimedFrame f = atHome(scene, 0);
+  ptz::test::FrameCrops c;
+  ptz::test::AimedFrame f = ptz::test::renderAtHome(scene, 0);
   c.images[0] = f.left;
   c.images[1] = f.right;
   const Eigen::Vector3d at0 = scene.objects[0].trajectory.position(0);
   const Eigen::Vector2d click = f.left_view.project(at0);
-  perception::ClickedObject first;
+  perception::PatchObject first;
   std::string why;
   ASSERT_TRUE(tracker.start(Side::kLeft, click, c.crop, f.left_view, f.right_view, &first, &why))
       << why;
@@ -81,7 +58,7 @@ TEST(Clicked, StartsOnATexturedPlateAndFollowsIt) {
   // A frame at a time, 1 s: it moves 0.25 m sideways and comes 0.1 m nearer.
   for (int k = 1; k <= 30; ++k) {
     const double t = k / 30.0;
-    f = atHome(scene, t);
+    f = ptz::test::renderAtHome(scene, t);
     c.images[0] = f.left;
     c.images[1] = f.right;
     const auto o = tracker.find(nullptr, t, c.crop, f.left_view, f.right_view, &why);
@@ -95,12 +72,12 @@ TEST(Clicked, RefusesWhatItCannotModel) {
   sim::Scene scene;
   scene.objects = {plate("flat", {-0.3, 0, 2.0}, false)};
   scene.objects[0].half_extents_m = {0.2, 0.2, 0.005};
-  const ptz::test::AimedFrame f = atHome(scene, 0);
-  Crops c;
+  const ptz::test::AimedFrame f = ptz::test::renderAtHome(scene, 0);
+  ptz::test::FrameCrops c;
   c.images[0] = f.left;
   c.images[1] = f.right;
   perception::ClickedTracker tracker;
-  perception::ClickedObject o;
+  perception::PatchObject o;
   std::string why;
   const Eigen::Vector2d on_flat = f.left_view.project(scene.objects[0].trajectory.centre_m);
   EXPECT_FALSE(tracker.start(Side::kLeft, on_flat, c.crop, f.left_view, f.right_view, &o, &why));
@@ -124,7 +101,7 @@ TEST(Clicked, RefusesWhatItCannotModel) {
   sim::Scene twins;
   twins.objects = {plate("a", {-0.25, 0, 2.5}, true), plate("b", {0.25, 0, 2.5}, true)};
   twins.objects[0].yaw_rad = twins.objects[1].yaw_rad = 0;
-  const ptz::test::AimedFrame g = atHome(twins, 0);
+  const ptz::test::AimedFrame g = ptz::test::renderAtHome(twins, 0);
   c.images[0] = g.left;
   c.images[1] = g.right;
   const Eigen::Vector2d on_a = g.left_view.project(twins.objects[1].trajectory.centre_m);
@@ -132,7 +109,7 @@ TEST(Clicked, RefusesWhatItCannotModel) {
   EXPECT_NE(why.find("alike"), std::string::npos) << why;
 }
 
-TEST(Clicked, AClickOnNoTrackMakesTheClickedObjectTheTarget) {
+TEST(Clicked, AClickOnNoTrackMakesThePatchObjectTheTarget) {
   sim::Scene scene;
   scene.objects = {plate("plate", {0.3, 0.0, 2.5}, true)};
   sim::Simulator s(ptz::StereoRig::makeDefault(), scene, ptz::defaultPlantParams(), 2.0, 1);

@@ -1,12 +1,14 @@
-#include "sim/scene.hpp"
+#include "sim/scene/scene.hpp"
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "common/markers.hpp"
 #include "common/rig.hpp"
+#include "sim/scene/pictures.hpp"
 
 namespace ptz::sim {
 
@@ -68,19 +70,40 @@ Eigen::Vector3d Trajectory::velocity(double t) const {
 }
 
 double SceneObject::boundingRadius() const {
-  return shape == Shape::kSphere ? radius_m : half_extents_m.norm();
+  switch (shape) {
+    case Shape::kSphere:
+      return radius_m;
+    case Shape::kBox:
+      return half_extents_m.norm();
+    case Shape::kPerson:
+      return std::hypot(height_m / 2, height_m / 4);
+  }
+  return 0;
 }
 
 double SceneObject::yaw(double t_s) const {
-  return shape == Shape::kBox ? yaw_rad + yaw_rate_rad_s * t_s : 0.0;
+  return shape == Shape::kSphere ? 0.0 : yaw_rad + yaw_rate_rad_s * t_s;
 }
 
 Eigen::Matrix3d SceneObject::rotationHeadObject(double t_s) const {
-  if (shape != Shape::kBox) return Eigen::Matrix3d::Identity();
+  if (shape == Shape::kSphere) return Eigen::Matrix3d::Identity();
   return (Eigen::AngleAxisd(yaw(t_s), Eigen::Vector3d::UnitY()) *
           Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitX()) *
           Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitZ()))
       .toRotationMatrix();
+}
+
+bool SceneObject::hasMarkers() const {
+  return std::any_of(tags.begin(), tags.end(), [](const SceneTag& t) { return t.isMarker(); });
+}
+
+double SceneObject::stride(double t_s) const {
+  if (shape != Shape::kPerson) return 0;
+  // A step as long as the walk is fast, up to a walker's at 1.5 m/s; a gait cycle of 1.1 s.
+  constexpr double kLongStride = 0.12, kBriskWalk_m_s = 1.5, kGaitCycle_s = 1.1;
+  const double speed_m_s = trajectory.velocity(t_s).norm();
+  return kLongStride * std::min(1.0, speed_m_s / kBriskWalk_m_s) *
+         std::sin(2 * M_PI * t_s / kGaitCycle_s);
 }
 
 std::vector<Eigen::Vector3d> Chessboard::innerCorners() const {
@@ -115,48 +138,70 @@ const std::vector<std::string> kObjectFields = {"name",     "class",      "shape
                                                 "textured", "trajectory", "centre_m", "amplitude_m",
                                                 "period_s", "phase_rad",  "seed",     "arc_rad"};
 
-// A box's tags: each on one of its faces (its z axis along a box axis, into the box; its centre on
-// that face) and inside it.
+// Where a print lies on its box: its z axis along a box axis, into the box, its centre on that
+// face, and all of it inside the face (height_m: the print's extent along its y axis).
+void checkOnFace(const SceneTag& tag, double height_m, const Eigen::Vector3d& half_m,
+                 const std::string& w) {
+  const Eigen::Vector3d z = tag.rotation_object_tag.col(2);
+  int axis = 0;
+  z.cwiseAbs().maxCoeff(&axis);
+  const double inward = z[axis];
+  if (std::abs(std::abs(inward) - 1) > 1e-6 ||
+      std::abs(tag.centre_m[axis] + (inward > 0 ? half_m[axis] : -half_m[axis])) > 1e-6) {
+    throw ConfigError(w +
+                      ": the print is on no face of the box (its z axis, into the box, must be "
+                      "a box axis and its centre_m on that face)");
+  }
+  for (int k = 0; k < 3; ++k) {
+    const double reach = std::abs(tag.centre_m[k]) +
+                         tag.size_m / 2 * std::abs(tag.rotation_object_tag(k, 0)) +
+                         height_m / 2 * std::abs(tag.rotation_object_tag(k, 1));
+    if (k != axis && reach > half_m[k] + 1e-9) {
+      throw ConfigError(w + ": the print reaches beyond its face");
+    }
+  }
+}
+
+// A box's tags (`tags`: fiducial markers) and pictures (`prints`: `picture: face`, drawn), each
+// on one of its faces and inside it.
 std::vector<SceneTag> readTags(const cv::FileNode& n, const Eigen::Vector3d& half_m,
                                const std::string& where) {
   std::vector<SceneTag> tags;
-  if (n["tags"].empty()) return tags;
-  const cv::FileNode list = n["tags"];
-  if (!list.isSeq()) throw ConfigError(fieldPath(where, "tags") + ": must be a list");
-  int i = 0;
-  for (const auto& t : list) {
-    const std::string w = where + ".tags[" + std::to_string(i++) + "]";
-    checkFields(t, {"family", "id", "size_m", "centre_m", "yaw_deg", "pitch_deg"}, w);
-    SceneTag tag;
-    if (!t["family"].empty()) tag.family = readString(t, "family", w);
-    tag.id = readInt(t, "id", w, Range::atLeast(0));
-    std::string why;
-    if (!markerCells(tag.family, tag.id, &tag.cells, &why)) throw ConfigError(w + ": " + why);
-    tag.size_m = readDouble(t, "size_m", w, Range::above(0));
-    tag.centre_m = vec3(t, "centre_m", w, Eigen::Vector3d::Zero());
-    tag.rotation_object_tag =
-        tagRotation(readDouble(t, "yaw_deg", w, 0, Range::between(-360, 360)),
-                    readDouble(t, "pitch_deg", w, 0, Range::between(-360, 360)));
-    const Eigen::Vector3d z = tag.rotation_object_tag.col(2);
-    int axis = 0;
-    z.cwiseAbs().maxCoeff(&axis);
-    const double inward = z[axis];
-    if (std::abs(std::abs(inward) - 1) > 1e-6 ||
-        std::abs(tag.centre_m[axis] + (inward > 0 ? half_m[axis] : -half_m[axis])) > 1e-6) {
-      throw ConfigError(w +
-                        ": the tag is on no face of the box (its z axis, into the box, must be "
-                        "a box axis and its centre_m on that face)");
-    }
-    for (int k = 0; k < 3; ++k) {
-      const double reach =
-          std::abs(tag.centre_m[k]) +
-          tag.size_m / 2 *
-              (std::abs(tag.rotation_object_tag(k, 0)) + std::abs(tag.rotation_object_tag(k, 1)));
-      if (k != axis && reach > half_m[k] + 1e-9) {
-        throw ConfigError(w + ": the tag reaches beyond its face");
+  for (const std::string list_name : {"tags", "prints"}) {
+    if (n[list_name].empty()) continue;
+    const cv::FileNode list = n[list_name];
+    if (!list.isSeq()) throw ConfigError(fieldPath(where, list_name) + ": must be a list");
+    const bool markers = list_name == "tags";
+    int i = 0;
+    for (const auto& t : list) {
+      const std::string w = where + "." + list_name + "[" + std::to_string(i++) + "]";
+      SceneTag tag;
+      if (markers) {
+        checkFields(t, {"family", "id", "size_m", "centre_m", "yaw_deg", "pitch_deg"}, w);
+        if (!t["family"].empty()) tag.family = readString(t, "family", w);
+        tag.id = readInt(t, "id", w, Range::atLeast(0));
+        std::string why;
+        if (!markerCells(tag.family, tag.id, &tag.cells, &why)) throw ConfigError(w + ": " + why);
+      } else {
+        checkFields(t, {"picture", "size_m", "centre_m", "yaw_deg", "pitch_deg"}, w);
+        tag.family.clear();
+        tag.id = -1;
+        const std::string picture = readString(t, "picture", w);
+        if (picture != "face") {
+          throw ConfigError(fieldPath(w, "picture") + ": must be face, got '" + picture + "'");
+        }
+        tag.picture = facePicture(256);
       }
+      tag.size_m = readDouble(t, "size_m", w, Range::above(0));
+      tag.centre_m = vec3(t, "centre_m", w, Eigen::Vector3d::Zero());
+      tag.rotation_object_tag =
+          tagRotation(readDouble(t, "yaw_deg", w, 0, Range::between(-360, 360)),
+                      readDouble(t, "pitch_deg", w, 0, Range::between(-360, 360)));
+      const double height_m =
+          markers ? tag.size_m : tag.size_m * tag.picture.rows / tag.picture.cols;
+      checkOnFace(tag, height_m, half_m, w);
+      tags.push_back(tag);
     }
-    tags.push_back(tag);
   }
   return tags;
 }
@@ -169,10 +214,13 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   if (shape == "sphere") {
     known.push_back("radius_m");
   } else if (shape == "box") {
-    known.insert(known.end(),
-                 {"half_extents_m", "yaw_rad", "yaw_rate_rad_s", "pitch_rad", "roll_rad", "tags"});
+    known.insert(known.end(), {"half_extents_m", "yaw_rad", "yaw_rate_rad_s", "pitch_rad",
+                               "roll_rad", "tags", "prints"});
+  } else if (shape == "person") {
+    known.insert(known.end(), {"height_m", "yaw_rad"});
   } else {
-    throw ConfigError(fieldPath(w, "shape") + ": must be sphere or box, got '" + shape + "'");
+    throw ConfigError(fieldPath(w, "shape") + ": must be sphere, box or person, got '" + shape +
+                      "'");
   }
   checkFields(n, known, w);
   o.name = readString(n, "name", w);
@@ -180,6 +228,10 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   if (shape == "sphere") {
     o.shape = SceneObject::Shape::kSphere;
     o.radius_m = readDouble(n, "radius_m", w, Range::above(0));
+  } else if (shape == "person") {
+    o.shape = SceneObject::Shape::kPerson;
+    o.height_m = readDouble(n, "height_m", w, o.height_m, Range::between(0.2, 3.0));
+    o.yaw_rad = readDouble(n, "yaw_rad", w, 0.0, Range::between(-M_PI, M_PI));
   } else {
     o.shape = SceneObject::Shape::kBox;
     o.half_extents_m = vec3(n, "half_extents_m", w, Eigen::Vector3d::Zero(), Range::above(0));

@@ -30,28 +30,34 @@ struct Trajectory {
   static Type parseType(const std::string& name, const std::string& where);
 };
 
-// A fiducial marker printed on a box's face (common/markers.hpp: the family, the tag's frame).
+// A fiducial marker printed on a box's face (common/markers.hpp: the family, the tag's frame), or
+// a picture printed there (a face; cells empty, family empty).
 struct SceneTag {
   std::string family = "apriltag_36h11";
   int id = 0;
-  double size_m = 0.1;                                 // edge of the black square
+  double size_m = 0.1;  // edge of the black square; a picture's width
   Eigen::Vector3d centre_m = Eigen::Vector3d::Zero();  // in the box's frame, on a face
   Eigen::Matrix3d rotation_object_tag = Eigen::Matrix3d::Identity();
-  cv::Mat cells;  // markerCells: 0 black, 255 white, the black border included
+  cv::Mat cells;    // markerCells: 0 black, 255 white, the black border included
+  cv::Mat picture;  // a print's BGR reflectance (255: white), its x along the tag frame's x
+  bool isMarker() const { return !cells.empty(); }
 };
 
 struct SceneObject {
-  enum class Shape { kSphere, kBox };
+  // person: a cut-out figure (sim/pictures.hpp) upright in its x-y plane, facing -z (the cameras at
+  // yaw 0), its centre at half its height; it steps with its speed.
+  enum class Shape { kSphere, kBox, kPerson };
   std::string name;
   std::string class_name;
   Shape shape = Shape::kSphere;
   double radius_m = 0.1;                                     // sphere
   Eigen::Vector3d half_extents_m = Eigen::Vector3d::Zero();  // box
-  double yaw_rad = 0.0;                                      // box, about the head's y axis
-  double yaw_rate_rad_s = 0.0;                               // box: its yaw turns at this rate
+  double height_m = 1.75;                                    // person
+  double yaw_rad = 0.0;         // box and person, about the head's y axis
+  double yaw_rate_rad_s = 0.0;  // box: its yaw turns at this rate
   // Box: then tilted about its x axis and rolled about its z axis (fixed).
   double pitch_rad = 0.0, roll_rad = 0.0;
-  std::vector<SceneTag> tags;  // box: markers on its faces
+  std::vector<SceneTag> tags;  // box: markers and pictures on its faces
   cv::Vec3b color_bgr{0, 0, 220};
   // The colour modulated by the backdrop's texture on the surface: gives dense stereo something
   // to match (plain objects only shade smoothly).
@@ -59,10 +65,14 @@ struct SceneObject {
   Trajectory trajectory;
 
   double boundingRadius() const;
-  // A box's yaw at t_s (yaw_rad + yaw_rate_rad_s t_s), 0 for a sphere; and the rotation
-  // head <- object, Ry(yaw) Rx(pitch) Rz(roll) (identity for a sphere).
+  // A box's or person's yaw at t_s (yaw_rad + yaw_rate_rad_s t_s), 0 for a sphere; and the
+  // rotation head <- object, Ry(yaw) Rx(pitch) Rz(roll) (identity for a sphere).
   double yaw(double t_s) const;
   Eigen::Matrix3d rotationHeadObject(double t_s) const;
+  // Whether a box carries a fiducial marker (its faces are told apart).
+  bool hasMarkers() const;
+  // A person's step at t_s: the feet's distance apart as a share of its height (0: standing).
+  double stride(double t_s) const;
 };
 
 struct Chessboard {
