@@ -255,13 +255,14 @@ bool run(const Run& r) {
 
 int main(int argc, char** argv) {
   ptz::Params p("ptz_bench_loop", "The closed loop in real time across processes.");
-  p.add("runs", "vga30,vga60,1080p30,1080p30-rec,1080p30-rec-480,vga30-markers",
+  p.add("runs", "vga30,vga60,1080p30,1080p30-rec,1080p30-rec-480,vga30-markers,vga30-people",
         "comma-separated runs: vga30, vga60, 1080p30 (the simulator rendering 1080p), "
         "1080p30-rec (a recording of it, one period of the ball's path, played in a loop by "
         "ptz-camera), 1080p30-rec-480 "
         "(the same, ptz-detect's full scans on the image reduced to 480 px), vga30-markers, "
         "1080p30-markers (config/sim_markers.yaml: the tagged cube followed by its tags, with "
-        "config/markers_tool.yaml)");
+        "config/markers_tool.yaml), vga30-people (config/sim_people.yaml: the walking figure "
+        "followed, a face and a person class of config/people.yaml)");
   p.add("seconds", 60.0, "s", "realtime duration of each run", ptz::Range::between(1, 3600));
   p.add("depth", true, "ptz-depth beside the loop");
   p.add("depth_priority", "nice", "ptz-depth's priority: nice (19) or idle (SCHED_IDLE)");
@@ -308,6 +309,11 @@ int main(int argc, char** argv) {
       r.detect_flags.insert(r.detect_flags.end(),
                             {"--markers-config", PTZ_SOURCE_DIR "/config/markers_tool.yaml",
                              "--target-class", "tool"});
+    } else if (name == "vga30-people") {
+      r.sim_config = PTZ_SOURCE_DIR "/config/sim_people.yaml";
+      r.detect_flags.insert(
+          r.detect_flags.end(),
+          {"--people-config", PTZ_SOURCE_DIR "/config/people.yaml", "--target-class", "person"});
     } else if (name == "1080p30") {
       r.image_size = "1080p";
     } else if (name == "1080p30-rec" || name == "1080p30-rec-480") {

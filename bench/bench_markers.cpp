@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
+#include "bench_scene.hpp"
 #include "bench_util.hpp"
 #include "common/measure.hpp"
 #include "perception/appearance/clicked.hpp"
 #include "perception/detection/detector.hpp"
 #include "perception/markers/marker_pose.hpp"
-#include "sim/simulator.hpp"
 
 using ptz::bench::Clock;
 using ptz::bench::ms;
@@ -25,16 +25,9 @@ namespace perception = ptz::perception;
 namespace {
 
 void run(const char* size_name, int width, int height) {
-  cv::FileStorage sim_cfg(PTZ_SOURCE_DIR "/config/sim_markers.yaml", cv::FileStorage::READ);
-  cv::FileStorage det_cfg(PTZ_SOURCE_DIR "/config/detect_default.yaml", cv::FileStorage::READ);
+  ptz::bench::BenchScene bench("sim_markers.yaml", width, height);
   cv::FileStorage mk_cfg(PTZ_SOURCE_DIR "/config/markers_tool.yaml", cv::FileStorage::READ);
-  const auto scene = ptz::sim::Scene::fromConfig(sim_cfg["scene"], sim_cfg["objects"],
-                                                 sim_cfg["chessboard"], "sim_markers.yaml");
-  const ptz::StereoRig rig = ptz::StereoRig::makeDefault().atSize(width, height);
   std::string why;
-  ptz::sim::Simulator sim(rig, scene, ptz::defaultPlantParams(), 2.0, 1);
-  const perception::Detector colours(
-      perception::DetectorParams::fromConfig(det_cfg["classes"], "detect_default.yaml"));
   const auto classes = perception::markerClassesFromConfig(mk_cfg["markers"], "markers_tool.yaml");
   std::vector<perception::MarkerClass> april, aruco;
   for (const auto& c : classes) (c.detector == "apriltag" ? april : aruco).push_back(c);
@@ -43,13 +36,11 @@ void run(const char* size_name, int width, int height) {
   perception::ClickedTracker clicked;
   int tags = 0;
   for (int i = 0; i < 60; ++i) {
-    sim.advanceTo(i / 30.0);
-    const ptz::sim::SimFrame f = sim.capture();
-    const ptz::CameraView lv = rig.view(ptz::Side::kLeft, f.left_pose);
-    const ptz::CameraView rv = rig.view(ptz::Side::kRight, f.right_pose);
+    ptz::CameraView lv, rv;
+    const ptz::sim::SimFrame f = bench.frameAt(i / 30.0, &lv, &rv);
     auto t0 = Clock::now();
-    colours.detect(f.left);
-    colours.detect(f.right);
+    bench.colours.detect(f.left);
+    bench.colours.detect(f.right);
     colour_ms.push_back(ms(Clock::now() - t0));
     t0 = Clock::now();
     const auto al = april_l.detect(f.left, {0, 0}, nullptr, 1.5);
@@ -65,7 +56,7 @@ void run(const char* size_name, int width, int height) {
     pose_ms.push_back(ms(Clock::now() - t0));
     tags += static_cast<int>(al.size());
     // A window around the cube in each view, as a tracked tag is looked for.
-    const Eigen::Vector3d cube = scene.objects[0].trajectory.position(i / 30.0);
+    const Eigen::Vector3d cube = bench.scene.objects[0].trajectory.position(i / 30.0);
     t0 = Clock::now();
     for (int s = 0; s < 2; ++s) {
       const ptz::CameraView& v = s == 0 ? lv : rv;
@@ -104,15 +95,11 @@ void run(const char* size_name, int width, int height) {
   report("ArUco, whole images", aruco_ms);
   report("tagged objects' poses from both views", pose_ms);
   report("clicked object, found in both views", click_ms);
-  std::printf("  %-46s %.1f x\n", "libapriltag whole / colour",
-              ptz::percentile(april_ms, 50) / ptz::percentile(colour_ms, 50));
+  ptz::bench::reportRatio("libapriltag whole / colour", april_ms, colour_ms);
 }
 
 }  // namespace
 
 int main() {
-  cv::setNumThreads(1);
-  run("VGA", 640, 480);
-  run("1080p", 1920, 1080);
-  return 0;
+  return ptz::bench::runAtVgaAnd1080p(run);
 }

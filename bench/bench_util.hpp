@@ -20,4 +20,10 @@ inline void report(const char* what, const std::vector<double>& v) {
               ptz::percentile(v, 99), v.size());
 }
 
+// The ratio of two medians (a cost against the same run's baseline).
+inline void reportRatio(const char* what, const std::vector<double>& a,
+                        const std::vector<double>& b) {
+  std::printf("  %-50s %.1f x\n", what, ptz::percentile(a, 50) / ptz::percentile(b, 50));
+}
+
 }  // namespace ptz::bench

@@ -74,6 +74,12 @@ class DetectNode {
     if (!publishWhileFresh(m, ch_tracks_, &out.tracks)) return;
     if (!publishWhileFresh(m, ch_pose_, &out.pose)) return;
     publishWhileFresh(m, ch_detections_, &out.detections);
+    // New tags, faces and people: once the frame's messages are out, off their latency.
+    if (!pipeline_.discover(m, &why)) {
+      log_.warn("discover", "ptz-detect: frame " + std::to_string(m.seq) +
+                                ": the search for new objects failed: " + why);
+    }
+    status_.setCounters(pipeline_.counters());
   }
 
   // A process stopped between two publishes (a send wakes the receivers, whose answer may stop

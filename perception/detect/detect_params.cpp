@@ -129,6 +129,10 @@ void declareDetectParams(Params& p) {
       "tracks: a tagged object turns at an angular velocity whose changes are white noise of this "
       "power spectral density per axis",
       Range::above(0));
+  p.add("new_objects_after_publish", true,
+        "tags, faces and people: their band and strip for new objects are searched once the "
+        "frame's messages are out (the frame's pose waits for the tracked objects' windows alone; "
+        "a new one is in the messages from the next frame on); false: before");
   const ClickedParams k;
   p.add("click_to_track", true,
         "TARGET_SELECT by an image point on no track starts a model of what is under it (its "
@@ -283,6 +287,7 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.people_scan.min_range_m = p.getDouble("min_range_m");
   c.people_scan.max_range_m = p.getDouble("max_range_m");
   c.click_to_track = p.getBool("click_to_track");
+  c.new_objects_after_publish = p.getBool("new_objects_after_publish");
   c.clicked.patch_px = p.getInt("click_patch_px");
   c.clicked.min_score = p.getDouble("click_min_score");
   c.clicked.min_range_m = p.getDouble("min_range_m");

@@ -43,6 +43,8 @@ struct DetectConfig {
   // Fiducial markers (the config file's section `markers`; none: not scanned for).
   std::vector<MarkerClass> markers;
   MarkerScanParams marker_scan;
+  // Tags', faces' and people's search for new ones after the frame's messages (discover()).
+  bool new_objects_after_publish = true;
   // A point on no track starts a model of what is under it (appearance/clicked.hpp).
   bool click_to_track = true;
   ClickedParams clicked;

@@ -47,6 +47,48 @@ TrackMeasurement patchMeasurement(const PatchObject& o, int object_index) {
   return m;
 }
 
+// Crops of both cameras' pixels, each from the parts decoded already where it can.
+void cropsOf(FramePixels* left, FramePixels* right, CropPixels crops[2]) {
+  FramePixels* pixels[2] = {left, right};
+  for (int s = 0; s < 2; ++s) {
+    crops[s] = [p = pixels[s]](const cv::Rect& r, cv::Mat* px, std::string* w) {
+      bool reused = false;
+      return p->crop(r, px, &reused, w);
+    };
+  }
+}
+
+// A frame's tags, faces and people in its windows or its band and strip (parts); OpenCV's or
+// libapriltag's refusal of some part of a frame costs that frame them (counted in *errors), never
+// the process. False when a crop fails (*why).
+bool scanTagsAndPeople(MarkerScanner* marker_scanner, PeopleScanner* people_scanner,
+                       const std::vector<Track>& tracks, const WindowParams& windows,
+                       ScanParts parts, double t_s, const CameraView& lv, const CameraView& rv,
+                       const CropPixels crops[2], MarkerScan* markers,
+                       std::vector<PatchObject>* people, std::map<std::string, int64_t>* errors,
+                       std::string* why) {
+  if (marker_scanner->enabled()) {
+    try {
+      if (!marker_scanner->scan(tracks, t_s, lv, rv, windows, crops, markers, why, parts)) {
+        return false;
+      }
+    } catch (const cv::Exception& e) {
+      *markers = {};
+      ++(*errors)["marker_errors"];
+    }
+  }
+  // Faces and people: found in the left view, ranged in the right.
+  if (people_scanner->enabled()) {
+    try {
+      if (!people_scanner->scan(tracks, t_s, lv, rv, crops, people, why, parts)) return false;
+    } catch (const cv::Exception& e) {
+      people->clear();
+      ++(*errors)["people_errors"];
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
@@ -95,45 +137,25 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     tm.yaw_rad = y.yaw_rad;
     tm.yaw_var_rad2 = y.variance_rad2;
   }
-  // Tags: windows around their tracks and a band, from the pixels decoded for the colours.
-  const CropPixels crops[2] = {[&](const cv::Rect& r, cv::Mat* px, std::string* w) {
-                                 bool reused = false;
-                                 return left_pixels.crop(r, px, &reused, w);
-                               },
-                               [&](const cv::Rect& r, cv::Mat* px, std::string* w) {
-                                 bool reused = false;
-                                 return right_pixels.crop(r, px, &reused, w);
-                               }};
+  // Tags, faces and people in the windows around their tracks, from the pixels decoded for the
+  // colours; their band and strip for new ones wait for discover() (new_objects_after_publish).
+  CropPixels crops[2];
+  cropsOf(&left_pixels, &right_pixels, crops);
   MarkerScan markers;
-  if (markers_.enabled()) {
-    // OpenCV's or libapriltag's refusal of some part of a frame costs that frame its tags, never
-    // the process (counted).
-    try {
-      if (!markers_.scan(tracker_.tracks(), t_s, lv, rv, config_.windows, crops, &markers, why)) {
-        return false;
-      }
-    } catch (const cv::Exception& e) {
-      markers = {};
-      ++counters_["marker_errors"];
-    }
-    for (size_t i = 0; i < markers.objects.size(); ++i) {
-      measurements.push_back(
-          markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
-    }
-  }
-  // Faces and people: found in the left view's windows and strip, ranged in the right.
   std::vector<PatchObject> people;
-  if (people_.enabled()) {
-    try {
-      if (!people_.scan(tracker_.tracks(), t_s, lv, rv, crops, &people, why)) return false;
-    } catch (const cv::Exception& e) {
-      people.clear();
-      ++counters_["people_errors"];
-    }
-    for (size_t i = 0; i < people.size(); ++i) {
-      measurements.push_back(patchMeasurement(
-          people[i], static_cast<int>(objects.size() + markers.objects.size() + i)));
-    }
+  const ScanParts parts =
+      config_.new_objects_after_publish ? ScanParts::kWindows : ScanParts::kBoth;
+  if (!scanTagsAndPeople(&markers_, &people_, tracker_.tracks(), config_.windows, parts, t_s, lv,
+                         rv, crops, &markers, &people, &scan_errors_, why)) {
+    return false;
+  }
+  for (size_t i = 0; i < markers.objects.size(); ++i) {
+    measurements.push_back(
+        markerMeasurement(markers.objects[i], static_cast<int>(objects.size() + i)));
+  }
+  for (size_t i = 0; i < people.size(); ++i) {
+    measurements.push_back(
+        patchMeasurement(people[i], static_cast<int>(objects.size() + markers.objects.size() + i)));
   }
   std::optional<PatchObject> clicked;
   try {
@@ -158,6 +180,39 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   makeMessages(m, t_s, target_id, lr, rr, objects, yaws, markers, people, clicked, lv, out);
   setCounters(target_id, out->pose.target_index);
+  return true;
+}
+
+bool DetectPipeline::discover(const ptzstereo::stereo_frame_t& m, std::string* why) {
+  if (!config_.new_objects_after_publish || (!markers_.enabled() && !people_.enabled())) {
+    return true;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
+  const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
+  const double t_s = m.utime * 1e-6;
+  FramePixels left_pixels(m.left), right_pixels(m.right);
+  CropPixels crops[2];
+  cropsOf(&left_pixels, &right_pixels, crops);
+  MarkerScan markers;
+  std::vector<PatchObject> people;
+  if (!scanTagsAndPeople(&markers_, &people_, tracker_.tracks(), config_.windows, ScanParts::kNew,
+                         t_s, lv, rv, crops, &markers, &people, &scan_errors_, why)) {
+    ++counters_["discoveries_failed"];
+    return false;
+  }
+  std::vector<TrackMeasurement> found;  // in none of the frame's messages
+  for (const MarkerObject& o : markers.objects) found.push_back(markerMeasurement(o, -1));
+  for (const PatchObject& o : people) found.push_back(patchMeasurement(o, -1));
+  tracker_.updateLate(t_s, found);
+  discovery_ms_.push_back(
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  setTrackAndScanCounters();
+  if (discovery_ms_.size() >= 30) {
+    counters_["discovery_us_p50"] = static_cast<int64_t>(percentile(discovery_ms_, 50) * 1000);
+    counters_["discovery_us_p99"] = static_cast<int64_t>(percentile(discovery_ms_, 99) * 1000);
+    discovery_ms_.clear();
+  }
   return true;
 }
 
@@ -265,7 +320,7 @@ void DetectPipeline::makeMessages(const ptzstereo::stereo_frame_t& m, double t_s
   tracks.num_tracks = static_cast<int32_t>(tracks.tracks.size());
 }
 
-void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
+void DetectPipeline::setTrackAndScanCounters() {
   counters_["tracks_live"] = static_cast<int64_t>(tracker_.tracks().size());
   counters_["tracks_started"] = tracker_.tracksStarted();
   counters_["tracks_recovered"] = tracker_.recoveries();
@@ -275,10 +330,21 @@ void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
   counters_["tracks_refused"] = tracker_.tracksRefused();
   counters_["track_rotations_accepted"] = tracker_.rotationsAccepted();
   counters_["track_rotations_refused"] = tracker_.rotationsRefused();
-  for (const auto& [name, n] : markers_.counts()) counters_[name] = n;
-  for (const auto& [name, n] : people_.counts()) counters_[name] = n;
-  counters_["target_id"] = target_id;
+  counters_["late_known"] = tracker_.lateKnown();
+  counters_["late_updates"] = tracker_.lateUpdates();
+  counters_["late_starts"] = tracker_.lateStarts();
+  counters_["late_dropped"] = tracker_.lateDropped();
   for (const auto& [reason, n] : tracker_.untrustedCounts()) counters_["untrusted_" + reason] = n;
+  using Counts = std::map<std::string, int64_t>;
+  for (const Counts* counts :
+       {&markers_.counts(), &people_.counts(), static_cast<const Counts*>(&scan_errors_)}) {
+    for (const auto& [name, n] : *counts) counters_[name] = n;
+  }
+}
+
+void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
+  setTrackAndScanCounters();
+  counters_["target_id"] = target_id;
   for (const auto& [name, n] : windows_.counts()) counters_[name] = n;
   ++counters_["frames_processed"];
   if (target_index < 0) ++counters_["frames_without_target"];

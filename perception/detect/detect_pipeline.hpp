@@ -52,6 +52,12 @@ class DetectPipeline {
   // colour): its messages in *out. False and *why when an image does not decode (the frame is
   // dropped; the tracks and the target are as before it).
   bool process(const ptzstereo::stereo_frame_t& frame, FrameOutputs* out, std::string* why);
+  // The search for new tags, faces and people in the frame process() took last (a band and a
+  // strip of it), once its messages are out: the latency of the frame's pose is its tracked
+  // objects' alone. What it finds joins the tracker at the frame's time (Tracker::updateLate): new
+  // objects start tracks, which the next frame's windows confirm and its messages carry. False
+  // and *why when a part does not decode (counted).
+  bool discover(const ptzstereo::stereo_frame_t& frame, std::string* why);
 
   // A TARGET_SELECT request (fresh: the main judged it) against the tracks and the views of the
   // newest frame processed. False and *why when it cannot be met: an unknown class, track or
@@ -69,7 +75,9 @@ class DetectPipeline {
   // target_changes, tracks_live, tracks_started, tracks_recovered, tracks_refused,
   // track_yaws_accepted, track_yaws_refused, untrusted_<reason>, the windows' (WindowScanner::
   // counts), orientations_estimated, _failed, _skipped, orientation_views_decoded, and every 30
-  // frames (boxes) processing_us_p50/_p99 (orientation_us_p50/_p99).
+  // frames (boxes) processing_us_p50/_p99 (orientation_us_p50/_p99); discover()'s late_known,
+  // late_updates, late_starts, late_dropped, discoveries_failed and every 30
+  // discovery_us_p50/_p99.
   const std::map<std::string, int64_t>& counters() const { return counters_; }
 
  private:
@@ -98,6 +106,8 @@ class DetectPipeline {
                     const std::optional<PatchObject>& clicked, const CameraView& lv,
                     FrameOutputs* out) const;
   void setCounters(int64_t target_id, int64_t target_index);
+  // The tracker's counts, the scanners' and their errors into counters_.
+  void setTrackAndScanCounters();
 
   DetectConfig config_;
   StereoRig rig_;
@@ -118,7 +128,8 @@ class DetectPipeline {
   // frame it was made on, a point on a track is judged in the newest.
   static constexpr size_t kViewsKept = 32;
   std::deque<std::pair<int64_t, std::pair<CameraView, CameraView>>> recent_views_;
-  std::vector<double> processing_ms_;
+  std::vector<double> processing_ms_, discovery_ms_;
+  std::map<std::string, int64_t> scan_errors_;  // marker_errors, people_errors
   std::vector<double> orientation_us_;
   std::map<std::string, int64_t> counters_;
 };

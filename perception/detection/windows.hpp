@@ -82,6 +82,10 @@ using DecodeParts = std::function<bool(const std::vector<cv::Rect>& rects,
 // rows row0 / scale .. ceil(row1 / scale) of the whole image reduced to reducedSize(), 8-bit BGR.
 using DecodeReduced =
     std::function<bool(int scale, int row0, int row1, cv::Mat* reduced, std::string* why)>;
+// What a scan of a frame looks at: the windows around its tracks (what the frame's messages wait
+// for), its band or strip for new objects (ptz-detect searches it after the messages are out), or
+// both.
+enum class ScanParts { kWindows, kNew, kBoth };
 // The pixels of `rect` (full-image coordinates, inside the image) of one camera's image, 8-bit BGR:
 // how the markers' and the clicked objects' searches read a frame.
 using CropPixels = std::function<bool(const cv::Rect& rect, cv::Mat* out, std::string* why)>;

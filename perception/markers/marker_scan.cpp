@@ -52,9 +52,11 @@ int MarkerScanner::classOf(const std::string& class_name) const {
 
 bool MarkerScanner::scan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
                          const CameraView& right, const WindowParams& windows,
-                         const CropPixels crop[2], MarkerScan* out, std::string* why) {
+                         const CropPixels crop[2], MarkerScan* out, std::string* why,
+                         ScanParts parts) {
   *out = {};
   if (!enabled()) return true;
+  const bool windows_too = parts != ScanParts::kNew, band_too = parts != ScanParts::kWindows;
   const CameraView* views[2] = {&left, &right};
   // Windows by class (a tracked tag is looked for by its own detector alone: ArUco costs 6-8
   // times libapriltag), merged within a class.
@@ -62,7 +64,7 @@ bool MarkerScanner::scan(const std::vector<Track>& tracks, double t_s, const Cam
   for (auto& side : of_class) side.resize(classes_.size());
   for (const Track& t : tracks) {
     const int c = classOf(t.class_name);
-    if (c < 0) continue;
+    if (c < 0 || !windows_too) continue;
     for (int s = 0; s < 2; ++s) {
       cv::Rect r;
       if (!trackWindow(*views[s], t, t_s, windows, &r)) continue;
@@ -85,14 +87,17 @@ bool MarkerScanner::scan(const std::vector<Track>& tracks, double t_s, const Cam
       }
     }
   }
-  const int n = std::max(1, p_.bands);
-  const int k = next_band_;
-  next_band_ = (next_band_ + 1) % n;
-  const int overlap = static_cast<int>(std::ceil(p_.band_overlap_fraction * size_.height));
-  const int row0 = std::max(0, k * size_.height / n - overlap);
-  const int row1 = std::min(size_.height, (k + 1) * size_.height / n + overlap);
-  const cv::Rect band = evenCut(cv::Rect(0, row0, size_.width, row1 - row0), size_);
-  ++counts_["marker_bands_scanned"];
+  cv::Rect band;
+  if (band_too) {
+    const int n = std::max(1, p_.bands);
+    const int k = next_band_;
+    next_band_ = (next_band_ + 1) % n;
+    const int overlap = static_cast<int>(std::ceil(p_.band_overlap_fraction * size_.height));
+    const int row0 = std::max(0, k * size_.height / n - overlap);
+    const int row1 = std::min(size_.height, (k + 1) * size_.height / n + overlap);
+    band = evenCut(cv::Rect(0, row0, size_.width, row1 - row0), size_);
+    ++counts_["marker_bands_scanned"];
+  }
   counts_["marker_windows"] += static_cast<int64_t>(rects[0].size() + rects[1].size());
 
   std::string whys[2];
@@ -116,6 +121,7 @@ bool MarkerScanner::scan(const std::vector<Track>& tracks, double t_s, const Cam
           }
         }
       }
+      if (band.empty()) continue;
       cv::Mat pixels;
       if (!crop[s](band, &pixels, &whys[s])) {
         ok[s] = false;

@@ -45,11 +45,11 @@ class MarkerScanner {
   int classOf(const std::string& class_name) const;
 
   // One frame: windows around the tracks of tagged objects (predicted to t_s, windows' params),
-  // this frame's band; the sightings (a tag found in a window and the band counted once) and the
-  // objects. False when a crop fails (*why).
+  // this frame's band (the next band a call; parts: which of the two); the sightings (a tag found
+  // in a window and the band counted once) and the objects. False when a crop fails (*why).
   bool scan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
             const CameraView& right, const WindowParams& windows, const CropPixels crop[2],
-            MarkerScan* out, std::string* why);
+            MarkerScan* out, std::string* why, ScanParts parts = ScanParts::kBoth);
 
   // marker_windows, marker_windows_left_to_bands (larger than windows' max_cover_fraction of the
   // image), marker_bands_scanned, marker_sightings, marker_sightings_capped, marker_objects,

@@ -168,24 +168,27 @@ bool PeopleScanner::range(size_t c, const cv::Rect2d& box, const CameraView& lef
 
 bool PeopleScanner::scan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
                          const CameraView& right, const CropPixels crop[2],
-                         std::vector<PatchObject>* out, std::string* why) {
+                         std::vector<PatchObject>* out, std::string* why, ScanParts parts) {
   out->clear();
   if (!enabled()) return true;
   const cv::Rect image(0, 0, size_.width, size_.height);
   // One class's strip a frame: the classes take turns.
   const int n = std::max(1, p_.strips);
   const int turn = next_strip_;
-  next_strip_ = (next_strip_ + 1) % (n * static_cast<int>(classes_.size()));
-  const size_t scanned_class = static_cast<size_t>(turn % static_cast<int>(classes_.size()));
+  size_t scanned_class = classes_.size();  // none
+  if (parts != ScanParts::kWindows) {
+    next_strip_ = (next_strip_ + 1) % (n * static_cast<int>(classes_.size()));
+    scanned_class = static_cast<size_t>(turn % static_cast<int>(classes_.size()));
+    ++counts_["people_strips_scanned"];
+  }
   const int k = turn / static_cast<int>(classes_.size());
-  ++counts_["people_strips_scanned"];
   for (size_t c = 0; c < classes_.size(); ++c) {
     const PeopleClass& pc = classes_[c];
     std::vector<Box> boxes;
     // Windows: each track's box at its predicted place, scaled so the object is just above the
     // detector's smallest.
     for (const Track& t : tracks) {
-      if (t.class_name != pc.name) continue;
+      if (t.class_name != pc.name || parts == ScanParts::kNew) continue;
       const Eigen::Vector3d predicted = t.positionAt(t_s);
       const double z_m = left.toCamera(predicted).z();
       const Eigen::Vector2d q = left.project(predicted);
@@ -204,7 +207,8 @@ bool PeopleScanner::scan(const std::vector<Track>& tracks, double t_s, const Cam
                    static_cast<int>(std::ceil(h))) &
           image;
       if (window.empty()) continue;
-      const double scale = std::clamp(kWindowBoxScale * pc.min_box_px / box_h, 0.2, 2.0);
+      // Down to a 20th: a figure near the camera fills most of a 1080p frame's height.
+      const double scale = std::clamp(kWindowBoxScale * pc.min_box_px / box_h, 0.05, 2.0);
       // A window that would cost more than a whole image halved (a track long unseen, an object
       // small in the image) is left to the strips.
       if (window.area() * scale * scale > p_.max_window_px2) {

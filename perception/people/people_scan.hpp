@@ -47,11 +47,12 @@ class PeopleScanner {
   int classOf(const std::string& class_name) const;
   const std::vector<PeopleClass>& classes() const { return classes_; }
 
-  // One frame: windows around the tracks of these classes (predicted to t_s), this frame's strip;
-  // the objects found in the left view and ranged in the right. False when a crop fails (*why).
+  // One frame: windows around the tracks of these classes (predicted to t_s), this frame's strip
+  // (the next strip a call; parts: which of the two); the objects found in the left view and
+  // ranged in the right. False when a crop fails (*why).
   bool scan(const std::vector<Track>& tracks, double t_s, const CameraView& left,
             const CameraView& right, const CropPixels crop[2], std::vector<PatchObject>* out,
-            std::string* why);
+            std::string* why, ScanParts parts = ScanParts::kBoth);
 
   // people_windows, people_windows_left_to_strips, people_strips_scanned, people_boxes (the
   // detectors' hits), people_objects,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include "perception/tracking/yaw.hpp"
@@ -263,28 +264,7 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   std::vector<bool> updated(tracks_.size());
   const auto take = [&](size_t i, size_t j) {
     track_used[i] = meas_used[j] = true;
-    Track& t = tracks_[i];
-    const TrackMeasurement& m = measurements[j];
-    std::string untrusted = m.untrusted;
-    // The radius of a tentative track is still being learnt: its first measurement may be off.
-    if (untrusted.empty() && t.state != TrackState::kTentative && radiusOutOfLine(t, m)) {
-      untrusted = "size";
-    }
-    t.last_seen_s = t_s;
-    if (!untrusted.empty()) {
-      ++t.untrusted_updates;
-      ++untrusted_counts_[untrusted];
-      return;
-    }
-    correct(&t, m);
-    if (m.radius_m > 0) {
-      t.radius_m =
-          t.radius_m > 0 ? t.radius_m + p_.radius_filter * (m.radius_m - t.radius_m) : m.radius_m;
-    }
-    t.last_update_s = t.last_stereo_s = t_s;
-    t.object_index = m.object_index;
-    ++t.hits;
-    updated[i] = true;
+    updated[i] = apply(&tracks_[i], measurements[j], t_s);
   };
   auto pair = pairs.begin();
   for (; pair != pairs.end() && !std::get<0>(*pair); ++pair) {
@@ -327,17 +307,87 @@ void Tracker::update(double t_s, const std::vector<TrackMeasurement>& measuremen
   eraseExpired(t_s);
   // Trusted measurements no track took start tentative tracks; untrusted ones are no centre.
   for (size_t j = 0; j < measurements.size(); ++j) {
-    const TrackMeasurement& m = measurements[j];
-    if (meas_used[j] || !m.position_m.allFinite()) continue;
-    if (!m.untrusted.empty()) {
-      ++untrusted_counts_[m.untrusted];
+    if (!meas_used[j] && measurements[j].position_m.allFinite())
+      startIfTrusted(t_s, measurements[j]);
+  }
+}
+
+bool Tracker::startIfTrusted(double t_s, const TrackMeasurement& m) {
+  if (!m.untrusted.empty()) {
+    ++untrusted_counts_[m.untrusted];
+    return false;
+  }
+  if (tracks_.size() >= p_.max_tracks) {
+    ++tracks_refused_;
+    return false;
+  }
+  start(t_s, m);
+  return true;
+}
+
+bool Tracker::apply(Track* t, const TrackMeasurement& m, double t_s) {
+  std::string untrusted = m.untrusted;
+  // The radius of a tentative track is still being learnt: its first measurement may be off.
+  if (untrusted.empty() && t->state != TrackState::kTentative && radiusOutOfLine(*t, m)) {
+    untrusted = "size";
+  }
+  t->last_seen_s = t_s;
+  if (!untrusted.empty()) {
+    ++t->untrusted_updates;
+    ++untrusted_counts_[untrusted];
+    return false;
+  }
+  correct(t, m);
+  if (m.radius_m > 0) {
+    t->radius_m =
+        t->radius_m > 0 ? t->radius_m + p_.radius_filter * (m.radius_m - t->radius_m) : m.radius_m;
+  }
+  t->last_update_s = t->last_stereo_s = t_s;
+  t->object_index = m.object_index;
+  ++t->hits;
+  return true;
+}
+
+void Tracker::updateLate(double t_s, const std::vector<TrackMeasurement>& measurements) {
+  if (!started_ || !(t_s <= last_t_s_)) {  // of no frame updated yet (a new run): nothing to say
+    late_dropped_ += static_cast<int64_t>(measurements.size());
+    return;
+  }
+  // Of an earlier frame: as of the newest, as far off as an object may have moved meanwhile.
+  const double age_s = last_t_s_ - t_s;
+  const double moved_m = p_.initial_speed_sigma_m_s * age_s;
+  t_s = last_t_s_;
+  for (TrackMeasurement m : measurements) {
+    if (!m.position_m.allFinite()) continue;
+    m.covariance_m2 += Eigen::Matrix3d::Identity() * moved_m * moved_m;
+    // The nearest gated track of its class, by the update's cost.
+    Track* nearest = nullptr;
+    double best = std::numeric_limits<double>::infinity();
+    for (Track& t : tracks_) {
+      if (t.class_name != m.class_name) continue;
+      double log_det = 0;
+      const double d2 = distance2(t, m, &log_det);
+      if (d2 <= p_.gate_chi2 && d2 + log_det < best) best = d2 + log_det, nearest = &t;
+    }
+    if (nearest && nearest->last_seen_s == t_s) {
+      ++late_known_;  // the frame's own measurement of it came first
       continue;
     }
-    if (tracks_.size() >= p_.max_tracks) {
-      ++tracks_refused_;
+    if (nearest) {
+      if (apply(nearest, m, t_s)) {
+        nearest->object_index = -1;  // in no message of the frame
+        ++late_updates_;
+        if (nearest->state == TrackState::kCoasting) nearest->state = TrackState::kConfirmed;
+        if (nearest->state == TrackState::kTentative && nearest->hits >= p_.confirm_hits) {
+          nearest->state = TrackState::kConfirmed;
+        }
+      }
       continue;
     }
-    start(t_s, m);
+    if (startIfTrusted(t_s, m)) {
+      tracks_.back().object_index = -1;
+      ++late_starts_;
+    }
   }
 }
 

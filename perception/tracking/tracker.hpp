@@ -158,6 +158,19 @@ class Tracker {
   // and counts as updated (confirmed). views: the frame's cameras.
   void updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
                        const CameraView& left, const CameraView& right);
+  // Measurements of a frame update() took (t_s: its time) found after its messages were out
+  // (ptz-detect's search for new objects, kept off the frames' latency): one gated by a track the
+  // newest frame saw already is dropped (counted known), one gated by a track it did not see
+  // updates that track (counted), any other trusted one starts a tentative track (counted). Of an
+  // earlier frame than the newest: taken as the newest's, its covariance grown by how far an
+  // object may have moved since (initial_speed_sigma_m_s times the age). Of a time after the
+  // newest (a new run): dropped, counted.
+  void updateLate(double t_s, const std::vector<TrackMeasurement>& measurements);
+  // updateLate's counts since the start: known, updates, starts, dropped.
+  int64_t lateKnown() const { return late_known_; }
+  int64_t lateUpdates() const { return late_updates_; }
+  int64_t lateStarts() const { return late_starts_; }
+  int64_t lateDropped() const { return late_dropped_; }
   // Tracks moved by one view, since the start.
   int64_t viewUpdates() const { return view_updates_; }
   const std::vector<Track>& tracks() const { return tracks_; }
@@ -186,12 +199,17 @@ class Tracker {
   // Whether m's radius is off t's by more than max_radius_ratio (both known).
   bool radiusOutOfLine(const Track& t, const TrackMeasurement& m) const;
   void correct(Track* t, const TrackMeasurement& m);
+  // m taken by t at t_s (t predicted to it): corrected unless m or its radius is untrusted
+  // (counted); true when corrected.
+  bool apply(Track* t, const TrackMeasurement& m, double t_s);
   // The yaw filter's update by m's yaw (at t's time), with the wrap of its period.
   void correctYaw(Track* t, const TrackMeasurement& m);
   // The full orientation's update by m's (tagged objects).
   void correctRotation(Track* t, const TrackMeasurement& m);
   Eigen::Matrix3d measurementCovariance(const TrackMeasurement& m) const;
   void start(double t_s, const TrackMeasurement& m);
+  // A track started by m unless m is untrusted or max_tracks are live (each counted).
+  bool startIfTrusted(double t_s, const TrackMeasurement& m);
   // The non-tentative track of m's class not taken this frame whose prediction is nearest m
   // within the recovery radius.
   Track* recoverable(double t_s, const TrackMeasurement& m, const std::vector<bool>& taken);
@@ -211,6 +229,7 @@ class Tracker {
   int64_t rotations_accepted_ = 0;
   int64_t rotations_refused_ = 0;
   int64_t view_updates_ = 0;
+  int64_t late_known_ = 0, late_updates_ = 0, late_starts_ = 0, late_dropped_ = 0;
 };
 
 }  // namespace ptz::perception

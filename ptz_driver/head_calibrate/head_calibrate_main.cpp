@@ -131,6 +131,9 @@ class HeadCalibrateNode {
         h->receive(nowS());
         h->inquire(nowS(), 0.5);
       }
+      // Re-sent, as ptz-driver does each tick: a head whose request failed drops the move it
+      // held (the camera may not have taken it), and hears it again here.
+      if (nowS() - last_command_s_ >= kCommandPeriodS) command();
       status_.maybePublish();
     }
     stopper.stop();
@@ -142,6 +145,15 @@ class HeadCalibrateNode {
         if (!problem.empty()) {
           std::fprintf(stderr, "ptz-head-calibrate: the %s head: %s\n", i == 0 ? "left" : "right",
                        problem.c_str());
+        }
+        const HeadStats& st = heads_[i]->stats();
+        if (st.timeouts + st.errors + st.malformed > 0) {
+          std::fprintf(stderr,
+                       "ptz-head-calibrate: the %s head: %lld timeouts, %lld errors, %lld "
+                       "malformed of %lld requests (the last: %s)\n",
+                       i == 0 ? "left" : "right", static_cast<long long>(st.timeouts),
+                       static_cast<long long>(st.errors), static_cast<long long>(st.malformed),
+                       static_cast<long long>(st.sent), st.last_error.c_str());
         }
       }
       return 1;
@@ -159,6 +171,7 @@ class HeadCalibrateNode {
   static double nowS() { return wallUtime() * 1e-6; }
 
   void command() {
+    last_command_s_ = nowS();
     const UnitPose& u = calibration_.target();
     for (auto& h : heads_) h->command(PtzPose{u.pan, u.tilt, 1 + u.zoom}, nowS());
   }
@@ -196,7 +209,8 @@ class HeadCalibrateNode {
   UnitMapGuess guess_;
   HeadCalibration calibration_;
   std::array<std::unique_ptr<PtzHead>, 2> heads_;
-  double frame_timeout_s_, last_frame_s_ = 0;
+  static constexpr double kCommandPeriodS = 0.1;
+  double frame_timeout_s_, last_frame_s_ = 0, last_command_s_ = 0;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
 };
 

@@ -249,8 +249,10 @@ awk -v o="${orientation:-99}" 'BEGIN {exit !(o < 2)}' ||
 echo "demo --scene markers: ${samples:-0} poses with the cube's orientation, ${orientation:-?} deg RMS"
 
 echo "== scripts/demo --scene people: the walking person found by HOG and followed"
-out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --scene people --private-net \
-  --out "$work/demo-people" 2>&1)
+# At 15 Hz: the demo's processes take more than one core at 30 Hz (the figure's rendering, HOG),
+# and this test shares the machine with another; frames ptz-detect had no time for count as lost.
+out=$(timeout 200 "$src/scripts/demo" --no-build --duration 5 --rate 15 --scene people \
+  --private-net --out "$work/demo-people" 2>&1)
 rc=$?
 [ $rc -eq 0 ] || bad "demo --scene people exits $rc: $(tail -5 <<<"$out")"
 error=$(sed -n 's/^ *"position_error_rms_pct_of_range": \([0-9.]*\).*/\1/p' \

@@ -1,6 +1,6 @@
 // ptz-detect's pipeline as its main makes it (its parameters, config/detect_default.yaml, the
 // default rig, and settings as flags would set them), fed a frame again and again as a 30 Hz
-// camera would send it.
+// camera would send it, each frame's search for new objects after its messages.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -35,6 +35,7 @@ inline perception::FrameOutputs feedFrame(perception::DetectPipeline* pipeline,
   perception::FrameOutputs out;
   std::string why;
   EXPECT_TRUE(pipeline->process(m, &out, &why)) << why;
+  EXPECT_TRUE(pipeline->discover(m, &why)) << why;  // as ptz-detect does once out is sent
   return out;
 }
 

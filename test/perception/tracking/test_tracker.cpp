@@ -277,6 +277,60 @@ TEST(Tracker, BadMeasurementsAndTimeGoingBack) {
   EXPECT_EQ(only(tracker).id, 2);
 }
 
+// The search for new objects reports after the frame's update: what the frame saw already is
+// dropped, a coasting track is found again at the frame's time, anything else starts a track;
+// an earlier frame's count as the newest's, less sharp; a later one's are dropped.
+TEST(Tracker, LateMeasurementsOfTheFrameJustUpdated) {
+  Tracker tracker;
+  auto truth = [](double t) { return Eigen::Vector3d(-0.8 + 0.6 * t, 0.1, 3.0); };
+  int k = 0;
+  for (; k < 10; ++k) {
+    tracker.update(k * kFrameS, {at(truth(k * kFrameS)), at({0.5, 0, 2}, "green_box")});
+  }
+  // The ball hidden for 5 frames (coasting), the box seen by the frame itself.
+  for (; k < 15; ++k) tracker.update(k * kFrameS, {at({0.5, 0, 2}, "green_box")});
+  const double t_s = (k - 1) * kFrameS;
+  ASSERT_EQ(tracker.find(1)->state, TrackState::kCoasting);
+  tracker.updateLate(
+      t_s, {at(truth(t_s), "red_ball", 0.005, -1), at({0.5, 0, 2}, "green_box", 0.005, -1),
+            at({-0.5, 0.3, 4}, "green_box", 0.005, -1)});
+  EXPECT_EQ(tracker.lateKnown(), 1);    // the box
+  EXPECT_EQ(tracker.lateUpdates(), 1);  // the ball, confirmed again at the frame's time
+  EXPECT_EQ(tracker.lateStarts(), 1);   // a second box
+  const Track& ball = *tracker.find(1);
+  EXPECT_EQ(ball.state, TrackState::kConfirmed);
+  EXPECT_EQ(ball.last_update_s, t_s);
+  EXPECT_EQ(ball.object_index, -1);  // in none of the frame's messages
+  EXPECT_LT((ball.position() - truth(t_s)).norm(), 0.01);
+  ASSERT_EQ(tracker.tracks().size(), 3u);
+  const Track& fresh = tracker.tracks().back();
+  EXPECT_EQ(fresh.class_name, "green_box");
+  EXPECT_EQ(fresh.state, TrackState::kTentative);
+  EXPECT_LT((fresh.position() - Eigen::Vector3d(-0.5, 0.3, 4)).norm(), 1e-9);
+  // Confirmed by the next frames' own measurements, the same track.
+  for (; k < 18; ++k) {
+    tracker.update(k * kFrameS, {at(truth(k * kFrameS)), at({0.5, 0, 2}, "green_box"),
+                                 at({-0.5, 0.3, 4}, "green_box")});
+  }
+  EXPECT_EQ(tracker.tracks().size(), 3u);
+  EXPECT_EQ(tracker.tracks().back().state, TrackState::kConfirmed);
+  // Of an earlier frame (3 frames back): the ball's found as the newest frame's own, a third box
+  // new, as of the newest frame; of a time to come: dropped.
+  const double newest_s = (k - 1) * kFrameS;
+  tracker.updateLate(
+      t_s, {at(truth(t_s), "red_ball", 0.005, -1), at({1, 1, 5}, "green_box", 0.005, -1)});
+  EXPECT_EQ(tracker.lateKnown(), 2);
+  EXPECT_EQ(tracker.lateStarts(), 2);
+  ASSERT_EQ(tracker.tracks().size(), 4u);
+  EXPECT_EQ(tracker.tracks().back().t_s, newest_s);
+  // Its covariance grown by 3 frames at the speed a new track may have.
+  const double grown_m = TrackerParams{}.initial_speed_sigma_m_s * 3 * kFrameS;
+  EXPECT_GT(tracker.tracks().back().positionCovariance()(0, 0), 0.9 * grown_m * grown_m);
+  tracker.updateLate(newest_s + kFrameS, {at({-1, 1, 5}, "green_box", 0.005, -1)});
+  EXPECT_EQ(tracker.lateDropped(), 1);
+  EXPECT_EQ(tracker.tracks().size(), 4u);
+}
+
 TEST(Tracker, AnotherClassNeverUpdatesATrack) {
   Tracker tracker;
   for (int k = 0; k < 5; ++k) tracker.update(k * kFrameS, {at({0, 0, 3})});

