@@ -57,7 +57,10 @@ void declareSimSceneParams(Params& p) {
         Range::between(-1e9, 1e9));
   p.addSection("scene",
                "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
-               "texture_seed (7)");
+               "texture_seed (7), light (off): {brightness_s and brightness (keyframes of the "
+               "scene's brightness, linear between), mains_hz and flicker_depth (lamps flickering "
+               "at twice the mains' frequency, dipping by the depth), vignetting (the corners' "
+               "light lost, as the radius squared, 0 .. 0.9)}");
   p.addSection("objects",
                "list of {name, class, shape: sphere|box|person, radius_m | half_extents_m | "
                "height_m (person, 1.75), yaw_rad (box, person) and yaw_rate_rad_s (box, about the "

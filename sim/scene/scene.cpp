@@ -266,15 +266,17 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
   Scene scene;
   if (!scene_node.empty()) {
     const std::string w = where + ", scene";
-    checkFields(scene_node,
-                {"backdrop_distance_m", "floor_height_m", "texture_m_per_texel", "texture_seed"},
-                w);
+    checkFields(
+        scene_node,
+        {"backdrop_distance_m", "floor_height_m", "texture_m_per_texel", "texture_seed", "light"},
+        w);
     scene.backdrop_distance_m =
         readDouble(scene_node, "backdrop_distance_m", w, 8.0, Range::above(0.5));
     scene.floor_height_m = readDouble(scene_node, "floor_height_m", w, 1.4);
     scene.texture_m_per_texel =
         readDouble(scene_node, "texture_m_per_texel", w, 0.01, Range::above(0));
     scene.texture_seed = readSeed(scene_node, "texture_seed", w, scene.texture_seed);
+    scene.light = Light::fromConfig(scene_node["light"], w);
   }
   if (!objects.empty()) {
     if (!objects.isSeq()) throw ConfigError(where + ", objects: must be a list");

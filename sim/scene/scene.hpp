@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/config.hpp"
+#include "sim/scene/light.hpp"
 
 namespace ptz::sim {
 
@@ -95,6 +96,7 @@ struct Scene {
   unsigned texture_seed = 7;
   std::vector<SceneObject> objects;
   Chessboard chessboard;
+  Light light;  // off unless the scene section has `light`
 
   // Reads the config sections `scene`, `objects` and `chessboard`; errors name file and field.
   static Scene fromConfig(const cv::FileNode& scene, const cv::FileNode& objects,

@@ -1,0 +1,99 @@
+// The simulated light against its analytic values: brightness keyframes, mains flicker and
+// vignetting on a flat grey image; off by default, which leaves a rendered frame byte-identical;
+// a bad `light` map named.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "common/config.hpp"
+#include "common/rig.hpp"
+#include "sim/simulator.hpp"
+
+using ptz::sim::Light;
+
+namespace {
+
+Light fromText(const std::string& light_map) {
+  const std::string path = std::string(::testing::TempDir()) + "/light.yaml";
+  std::ofstream(path) << "%YAML:1.0\n---\nscene:\n  light: " << light_map << "\n";
+  cv::FileStorage fs = ptz::openForRead(path, "config file");
+  return ptz::sim::Scene::fromConfig(fs["scene"], fs["objects"], fs["chessboard"], path).light;
+}
+
+}  // namespace
+
+TEST(Light, BrightnessFollowsItsKeyframesAndTheFlickerTheMains) {
+  const Light ramp = fromText("{ brightness_s: [1, 3, 5], brightness: [1.0, 0.3, 1.0] }");
+  EXPECT_DOUBLE_EQ(ramp.gainAt(0), 1.0);  // held before the first
+  EXPECT_DOUBLE_EQ(ramp.gainAt(2), 0.65);
+  EXPECT_DOUBLE_EQ(ramp.gainAt(3), 0.3);
+  EXPECT_DOUBLE_EQ(ramp.gainAt(4.5), 0.3 + 0.7 * 0.75);
+  EXPECT_DOUBLE_EQ(ramp.gainAt(9), 1.0);  // and after the last
+  // 50 Hz mains: 100 Hz flicker, full at the mains' peaks, down 20 % at the zero crossings.
+  const Light flicker = fromText("{ mains_hz: 50, flicker_depth: 0.2 }");
+  EXPECT_NEAR(flicker.gainAt(0.005), 1.0, 1e-12);  // a quarter of 20 ms
+  EXPECT_NEAR(flicker.gainAt(0.010), 0.8, 1e-12);
+  EXPECT_NEAR(flicker.gainAt(0.015), 1.0, 1e-12);
+  EXPECT_NEAR(flicker.gainAt(0.0025), 0.9, 1e-12);  // sin^2 = 1/2 half-way
+  // A grey frame at 2 s of the ramp: every pixel 200 x 0.65.
+  cv::Mat grey(48, 64, CV_8UC3, cv::Scalar(200, 200, 200));
+  ramp.apply(2, &grey);
+  EXPECT_EQ(grey.at<cv::Vec3b>(20, 30), cv::Vec3b(130, 130, 130));
+  EXPECT_EQ(cv::countNonZero(grey.reshape(1) != 130), 0);
+}
+
+TEST(Light, VignettingDarkensTheCornersAsTheSquareOfTheRadius) {
+  const Light lens = fromText("{ vignetting: 0.3 }");
+  cv::Mat grey(481, 641, CV_8UC3, cv::Scalar(200, 200, 200));  // odd: a pixel at the centre
+  lens.apply(0, &grey);
+  EXPECT_EQ(grey.at<cv::Vec3b>(240, 320)[0], 200);  // the centre: untouched
+  EXPECT_EQ(grey.at<cv::Vec3b>(0, 0)[1], 140);      // a corner: 70 %
+  EXPECT_EQ(grey.at<cv::Vec3b>(480, 640)[2], 140);
+  const double r2 = 320.0 * 320.0 / (320.0 * 320.0 + 240.0 * 240.0);  // the middle of an edge
+  EXPECT_EQ(grey.at<cv::Vec3b>(240, 0)[0], cv::saturate_cast<uchar>(200 * (1 - 0.3 * r2)));
+}
+
+TEST(Light, OffByDefaultAFrameIsByteIdentical) {
+  ptz::sim::Scene scene;
+  scene.objects.resize(1);
+  scene.objects[0].trajectory.centre_m = Eigen::Vector3d(0.2, 0, 3);
+  ASSERT_TRUE(scene.light.off());
+  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+  ptz::sim::Simulator plain(rig, scene, ptz::defaultPlantParams(), 2.0, 1);
+  ptz::sim::Scene lit_scene = scene;
+  lit_scene.light.brightness_s = {0};
+  lit_scene.light.brightness = {1.0};  // on, at a gain of 1: the same pixels
+  ptz::sim::Simulator lit(rig, lit_scene, ptz::defaultPlantParams(), 2.0, 1);
+  const ptz::sim::SimFrame a = plain.capture(), b = lit.capture();
+  EXPECT_EQ(cv::norm(a.left, b.left, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(a.right, b.right, cv::NORM_INF), 0);
+  // Dimmed to 30 %: the image's mean follows (the noise's mean is zero).
+  ptz::sim::Scene dim_scene = scene;
+  dim_scene.light.brightness_s = {0};
+  dim_scene.light.brightness = {0.3};
+  ptz::sim::Simulator dim(rig, dim_scene, ptz::defaultPlantParams(), 0.0, 1);
+  ptz::sim::Simulator clean(rig, scene, ptz::defaultPlantParams(), 0.0, 1);
+  const double ratio = cv::mean(dim.capture().left)[1] / cv::mean(clean.capture().left)[1];
+  EXPECT_NEAR(ratio, 0.3, 0.005);
+}
+
+TEST(Light, BadLightIsNamed) {
+  const auto message = [](const std::string& map) {
+    try {
+      fromText(map);
+    } catch (const ptz::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("{ brightness_s: [0, 1], brightness: [1] }").find("1 values for 2 times"),
+            std::string::npos);
+  EXPECT_NE(message("{ brightness_s: [2, 1], brightness: [1, 1] }").find("times must increase"),
+            std::string::npos);
+  EXPECT_NE(message("{ vignetting: 2 }").find("vignetting"), std::string::npos);
+  EXPECT_NE(message("{ flicker: 1 }").find("flicker"), std::string::npos);
+  EXPECT_NE(message("{ brightness_s: [0], brightness: [-1] }").find("brightness"),
+            std::string::npos);
+  EXPECT_NE(message("[1, 2]").find("light: must be a map"), std::string::npos);
+}
