@@ -60,7 +60,9 @@ void declareSimSceneParams(Params& p) {
                "texture_seed (7), light (off): {brightness_s and brightness (keyframes of the "
                "scene's brightness, linear between), mains_hz and flicker_depth (lamps flickering "
                "at twice the mains' frequency, dipping by the depth), vignetting (the corners' "
-               "light lost, as the radius squared, 0 .. 0.9)}");
+               "light lost, as the radius squared, 0 .. 0.9), auto_exposure_target (the mean grey "
+               "the cameras' exposure steers to; 0: off), auto_exposure_time_constant_s (0.5), "
+               "auto_exposure_max_gain (8)}");
   p.addSection("objects",
                "list of {name, class, shape: sphere|box|person, radius_m | half_extents_m | "
                "height_m (person, 1.75), yaw_rad (box, person) and yaw_rate_rad_s (box, about the "

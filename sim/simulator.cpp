@@ -37,7 +37,9 @@ void Simulator::render(SimFrame* frame) {
     (camera == 0 ? left_renderer_ : right_renderer_)
         .render(camera == 0 ? left : right, f.t_s, image,
                 &f.visible_fraction[static_cast<size_t>(camera)]);
-    scene_->light.apply(f.t_s, image);  // the scene's light and the lens, then the sensor's noise
+    // The scene's light and the lens, the camera's exposure, then the sensor's noise.
+    scene_->light.apply(f.t_s, image);
+    exposure_[static_cast<size_t>(camera)].apply(scene_->light, f.t_s, image);
     noise_.apply(static_cast<uint64_t>(f.index), camera, image);
   }
 }

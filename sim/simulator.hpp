@@ -52,6 +52,7 @@ class Simulator {
   PtzPlant plant_;
   Renderer left_renderer_, right_renderer_;  // one each: their caches stay warm
   NoiseBank noise_;
+  std::array<AutoExposure, 2> exposure_;  // left, right
   int64_t next_index_ = 0;
 };
 

@@ -54,12 +54,28 @@ void Light::apply(double t_s, cv::Mat* bgr) const {
   }
 }
 
+void AutoExposure::apply(const Light& light, double t_s, cv::Mat* bgr) {
+  if (light.auto_exposure_target <= 0) return;
+  if (gain_ != 1) bgr->convertTo(*bgr, CV_8U, gain_);
+  const cv::Scalar mean = cv::mean(*bgr);
+  const double grey = std::max(1.0, (mean[0] + mean[1] + mean[2]) / 3);
+  const double wanted = std::clamp(gain_ * light.auto_exposure_target / grey,
+                                   1 / light.auto_exposure_max_gain, light.auto_exposure_max_gain);
+  const double dt_s = started_ ? std::max(0.0, t_s - last_t_s_) : 0;
+  gain_ += (1 - std::exp(-dt_s / light.auto_exposure_time_constant_s)) * (wanted - gain_);
+  last_t_s_ = t_s;
+  started_ = true;
+}
+
 Light Light::fromConfig(const cv::FileNode& node, const std::string& where) {
   Light light;
   if (node.empty()) return light;
   const std::string w = where + ", light";
   if (!node.isMap()) throw ConfigError(w + ": must be a map");
-  checkFields(node, {"brightness_s", "brightness", "mains_hz", "flicker_depth", "vignetting"}, w);
+  checkFields(node,
+              {"brightness_s", "brightness", "mains_hz", "flicker_depth", "vignetting",
+               "auto_exposure_target", "auto_exposure_time_constant_s", "auto_exposure_max_gain"},
+              w);
   if (!node["brightness"].empty() || !node["brightness_s"].empty()) {
     light.brightness_s = readNumberList(node, "brightness_s", w, Range::between(0, 1e6));
     light.brightness = readNumberList(node, "brightness", w, Range::between(0, 4));
@@ -79,6 +95,12 @@ Light Light::fromConfig(const cv::FileNode& node, const std::string& where) {
   light.mains_hz = readDouble(node, "mains_hz", w, 0.0, Range::between(0, 1000));
   light.flicker_depth = readDouble(node, "flicker_depth", w, 0.0, Range::between(0, 1));
   light.vignetting = readDouble(node, "vignetting", w, 0.0, Range::between(0, 0.9));
+  light.auto_exposure_target =
+      readDouble(node, "auto_exposure_target", w, 0.0, Range::between(0, 255));
+  light.auto_exposure_time_constant_s =
+      readDouble(node, "auto_exposure_time_constant_s", w, 0.5, Range::between(0.001, 100));
+  light.auto_exposure_max_gain =
+      readDouble(node, "auto_exposure_max_gain", w, 8.0, Range::between(1, 64));
   return light;
 }
 

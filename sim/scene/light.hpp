@@ -18,6 +18,11 @@ struct Light {
   double mains_hz = 0;       // lamps on mains of this frequency (50, 60) flicker at twice it
   double flicker_depth = 0;  // ... the light dipping by this share at the mains' zero crossings
   double vignetting = 0;     // the image corners' light lost (0.3: corners at 70 %), as r^2
+  // The cameras' auto-exposure (AutoExposure): the image's mean grey it steers to (0: off), how
+  // fast (a first-order lag), its largest gain and smallest.
+  double auto_exposure_target = 0;
+  double auto_exposure_time_constant_s = 0.5;
+  double auto_exposure_max_gain = 8;
 
   bool off() const;
   // The brightness times the flicker at t_s (a frame's exposure taken as instantaneous).
@@ -27,6 +32,22 @@ struct Light {
 
   // The scene section's `light` map (absent: off); errors name the file, the field and the value.
   static Light fromConfig(const cv::FileNode& light, const std::string& where);
+};
+
+// One camera's auto-exposure: a gain on its image that brings the image's mean grey to
+// auto_exposure_target, following it with a first-order lag, so that the image brightens or
+// darkens a while after the light or the view changed, as a real camera's does.
+class AutoExposure {
+ public:
+  // bgr at the gain the earlier frames set; the gain then moves toward what this frame asks for.
+  // Nothing when the light's auto_exposure_target is 0.
+  void apply(const Light& light, double t_s, cv::Mat* bgr);
+  double gain() const { return gain_; }
+
+ private:
+  double gain_ = 1;
+  double last_t_s_ = 0;
+  bool started_ = false;
 };
 
 }  // namespace ptz::sim

@@ -1,10 +1,11 @@
 // The simulated light against its analytic values: brightness keyframes, mains flicker and
-// vignetting on a flat grey image; off by default, which leaves a rendered frame byte-identical;
-// a bad `light` map named.
+// vignetting on a flat grey image, the auto-exposure's lag; off by default, which leaves a rendered
+// frame byte-identical; a bad `light` map named.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
+#include <map>
 
 #include "common/config.hpp"
 #include "common/rig.hpp"
@@ -78,6 +79,39 @@ TEST(Light, OffByDefaultAFrameIsByteIdentical) {
   EXPECT_NEAR(ratio, 0.3, 0.005);
 }
 
+// Dimmed to half in a step at 1 s: the auto-exposure's image is dark at first and comes back to
+// its target as 1 - exp(-t / tau) (its gain going from 1 to 2).
+TEST(Light, AutoExposureBringsADimmedImageBackWithItsLag) {
+  ptz::sim::Scene scene;
+  scene.objects.resize(1);
+  scene.objects[0].trajectory.centre_m = Eigen::Vector3d(0.2, 0, 3);
+  const ptz::StereoRig rig = ptz::StereoRig::makeDefault();
+  const auto grey = [](const cv::Mat& bgr) {
+    const cv::Scalar m = cv::mean(bgr);
+    return (m[0] + m[1] + m[2]) / 3;
+  };
+  ptz::sim::Simulator even(rig, scene, ptz::defaultPlantParams(), 0.0, 1);
+  const double target = grey(even.capture().left);
+  scene.light.brightness_s = {1.0, 1.001};
+  scene.light.brightness = {1.0, 0.5};
+  scene.light.auto_exposure_target = target;  // where the even light's image already is
+  scene.light.auto_exposure_time_constant_s = 0.3;
+  ptz::sim::Simulator sim(rig, scene, ptz::defaultPlantParams(), 0.0, 1);
+  std::map<int, double> at;  // frame -> the left image's mean grey, a share of the target
+  for (int k = 0; k <= 75; ++k) {
+    sim.advanceTo(k / 30.0);
+    at[k] = grey(sim.capture().left) / target;
+  }
+  EXPECT_NEAR(at[29], 1.0, 0.002);  // before the step: the gain held at 1
+  EXPECT_NEAR(at[31], 0.5, 0.03);   // just after: dark, the gain not moved yet
+  // tau after the step (frame 39: 0.3 s), the gain 2 - exp(-1) of the way, and 5 tau after.
+  for (const int k : {39, 75}) {
+    const double expected = 0.5 * (2 - std::exp(-(k / 30.0 - 1.001) / 0.3));
+    EXPECT_NEAR(at[k], expected, 0.03) << "frame " << k;
+  }
+  EXPECT_NEAR(at[75], 1.0, 0.03);
+}
+
 TEST(Light, BadLightIsNamed) {
   const auto message = [](const std::string& map) {
     try {
@@ -96,4 +130,6 @@ TEST(Light, BadLightIsNamed) {
   EXPECT_NE(message("{ brightness_s: [0], brightness: [-1] }").find("brightness"),
             std::string::npos);
   EXPECT_NE(message("[1, 2]").find("light: must be a map"), std::string::npos);
+  EXPECT_NE(message("{ auto_exposure_max_gain: 0.5 }").find("auto_exposure_max_gain"),
+            std::string::npos);
 }
