@@ -47,6 +47,11 @@ TrackMeasurement patchMeasurement(const PatchObject& o, int object_index) {
   return m;
 }
 
+// A camera's view as the frame says its head stood.
+CameraView frameView(const StereoRig& rig, Side side, const ptzstereo::image_t& image) {
+  return rig.view(side, {image.pan_rad, image.tilt_rad, image.zoom});
+}
+
 // Crops of both cameras' pixels, each from the parts decoded already where it can.
 void cropsOf(FramePixels* left, FramePixels* right, CropPixels crops[2]) {
   FramePixels* pixels[2] = {left, right};
@@ -106,8 +111,8 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
                              std::string* why) {
   out->click_note.clear();
-  const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
-  const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
+  const CameraView lv = frameView(rig_, Side::kLeft, m.left);
+  const CameraView rv = frameView(rig_, Side::kRight, m.right);
   const double t_s = m.utime * 1e-6;
   if (t_s < last_t_s_) {  // a new run of the source: a click and its model were the old run's
     pending_click_.reset();
@@ -188,8 +193,8 @@ bool DetectPipeline::discover(const ptzstereo::stereo_frame_t& m, std::string* w
     return true;
   }
   const auto t0 = std::chrono::steady_clock::now();
-  const CameraView lv = rig_.view(Side::kLeft, {m.left.pan_rad, m.left.tilt_rad, m.left.zoom});
-  const CameraView rv = rig_.view(Side::kRight, {m.right.pan_rad, m.right.tilt_rad, m.right.zoom});
+  const CameraView lv = frameView(rig_, Side::kLeft, m.left);
+  const CameraView rv = frameView(rig_, Side::kRight, m.right);
   const double t_s = m.utime * 1e-6;
   FramePixels left_pixels(m.left), right_pixels(m.right);
   CropPixels crops[2];

@@ -349,17 +349,12 @@ bool Tracker::apply(Track* t, const TrackMeasurement& m, double t_s) {
 }
 
 void Tracker::updateLate(double t_s, const std::vector<TrackMeasurement>& measurements) {
-  if (!started_ || !(t_s <= last_t_s_)) {  // of no frame updated yet (a new run): nothing to say
+  if (!started_ || t_s != last_t_s_) {  // not the frame just updated: too late to be of use
     late_dropped_ += static_cast<int64_t>(measurements.size());
     return;
   }
-  // Of an earlier frame: as of the newest, as far off as an object may have moved meanwhile.
-  const double age_s = last_t_s_ - t_s;
-  const double moved_m = p_.initial_speed_sigma_m_s * age_s;
-  t_s = last_t_s_;
-  for (TrackMeasurement m : measurements) {
+  for (const TrackMeasurement& m : measurements) {
     if (!m.position_m.allFinite()) continue;
-    m.covariance_m2 += Eigen::Matrix3d::Identity() * moved_m * moved_m;
     // The nearest gated track of its class, by the update's cost.
     Track* nearest = nullptr;
     double best = std::numeric_limits<double>::infinity();

@@ -158,13 +158,11 @@ class Tracker {
   // and counts as updated (confirmed). views: the frame's cameras.
   void updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
                        const CameraView& left, const CameraView& right);
-  // Measurements of a frame update() took (t_s: its time) found after its messages were out
-  // (ptz-detect's search for new objects, kept off the frames' latency): one gated by a track the
-  // newest frame saw already is dropped (counted known), one gated by a track it did not see
-  // updates that track (counted), any other trusted one starts a tentative track (counted). Of an
-  // earlier frame than the newest: taken as the newest's, its covariance grown by how far an
-  // object may have moved since (initial_speed_sigma_m_s times the age). Of a time after the
-  // newest (a new run): dropped, counted.
+  // Measurements of the frame update() took last (t_s: its time) found after its messages were
+  // out (ptz-detect's search for new objects, kept off the frame's latency): one gated by a track
+  // that frame saw already is dropped (counted known), one gated by a track it did not see updates
+  // that track (counted), any other trusted one starts a tentative track (counted). Of another
+  // frame's time: dropped, counted.
   void updateLate(double t_s, const std::vector<TrackMeasurement>& measurements);
   // updateLate's counts since the start: known, updates, starts, dropped.
   int64_t lateKnown() const { return late_known_; }
