@@ -41,6 +41,9 @@ ptz::Params declare() {
 void checkObject(const ptz::sim::SceneObject& o, const std::string& name) {
   if (o.shape == ptz::sim::SceneObject::Shape::kSphere) {
     FUZZ_CHECK(std::isfinite(o.radius_m) && o.radius_m > 0, name + " radius");
+  } else if (o.shape == ptz::sim::SceneObject::Shape::kPerson) {
+    FUZZ_CHECK(std::isfinite(o.height_m) && o.height_m > 0 && std::isfinite(o.yaw_rad),
+               name + " person");
   } else {
     FUZZ_CHECK(o.half_extents_m.allFinite() && (o.half_extents_m.array() > 0).all() &&
                    std::isfinite(o.yaw_rad),
@@ -65,6 +68,21 @@ void checkScene(const ptz::sim::Scene& s) {
   for (size_t i = 0; i < s.objects.size(); ++i) {
     checkObject(s.objects[i], "objects[" + std::to_string(i) + "]");
   }
+  // The light's direction a unit vector whenever asked; posters, shutter and shadows in range.
+  for (double time_s : {0.0, 0.37, 12.5, 3600.0}) {
+    const Eigen::Vector3d to_light = s.light.toLightAt(time_s);
+    FUZZ_CHECK(to_light.allFinite() && std::abs(to_light.norm() - 1) < 1e-9, "light direction");
+  }
+  FUZZ_CHECK(s.light.shadow_depth >= 0 && s.light.shadow_depth <= 1, "shadow depth");
+  FUZZ_CHECK(s.posters.size() <= ptz::sim::Poster::kMax, "posters");
+  for (const ptz::sim::Poster& poster : s.posters) {
+    FUZZ_CHECK(poster.centre_m.allFinite() && (poster.size_m.array() > 0).all() &&
+                   poster.size_m.allFinite() && poster.brightness >= 0 && poster.brightness <= 10,
+               "poster numbers");
+  }
+  FUZZ_CHECK(s.camera.exposure_s >= 0 && s.camera.exposure_s <= 0.2 && s.camera.blur_samples >= 2 &&
+                 s.camera.blur_samples <= 16,
+             "shutter");
   const ptz::sim::Chessboard& b = s.chessboard;
   if (!b.present) return;
   FUZZ_CHECK(b.inner_cols >= 2 && b.inner_rows >= 2 && std::isfinite(b.square_m) &&

@@ -64,9 +64,10 @@ bool sameIntrinsics(const Intrinsics& a, const Intrinsics& b) {
          a.distortion == b.distortion;
 }
 
-cv::Vec3b shade(const cv::Vec3b& base, const Eigen::Vector3d& normal) {
-  static const Eigen::Vector3d kToLight = Eigen::Vector3d(-0.3, -0.8, -0.5).normalized();
-  const double intensity = 0.45 + 0.55 * std::max(0.0, normal.dot(kToLight));
+// A matte surface of colour base lit from to_light (unit): an ambient 0.45 and 0.55 direct.
+cv::Vec3b shade(const cv::Vec3b& base, const Eigen::Vector3d& normal,
+                const Eigen::Vector3d& to_light) {
+  const double intensity = 0.45 + 0.55 * std::max(0.0, normal.dot(to_light));
   return cv::Vec3b(cv::saturate_cast<uchar>(base[0] * intensity),
                    cv::saturate_cast<uchar>(base[1] * intensity),
                    cv::saturate_cast<uchar>(base[2] * intensity));
@@ -84,35 +85,64 @@ double textureLevel(const cv::Mat& atlas, double x, double y) {
          ay * ((1 - ax) * at(x0, y0 + 1) + ax * at(x0 + 1, y0 + 1));
 }
 
-// Pixel rectangle that holds the image of a sphere of radius r around p (head frame): the
-// projections of a slightly larger sphere's surface, padded.
-cv::Rect boundingRect(const CameraView& view, const Eigen::Vector3d& p, double r) {
-  const Eigen::Vector3d pc = view.toCamera(p);
+// The pixels holding the projections of points (camera frame), padded by 2 px and pad_share of
+// the larger side, cut to the image; the whole image when a point is not in front of the camera.
+cv::Rect projectedRect(const CameraView& view, const std::vector<Eigen::Vector3d>& points_camera,
+                       double pad_share) {
   const cv::Rect whole(0, 0, view.width, view.height);
-  if (pc.z() + r <= 0) return {};
   double u0 = 1e9, v0 = 1e9, u1 = -1e9, v1 = -1e9;
-  for (int i = 0; i <= 8; ++i) {
-    const double lat = M_PI * i / 8 - M_PI / 2;
-    for (int j = 0; j < 16; ++j) {
-      const double lon = 2 * M_PI * j / 16;
-      const Eigen::Vector3d q =
-          pc + 1.25 * r *
-                   Eigen::Vector3d(std::cos(lat) * std::cos(lon), std::sin(lat),
-                                   std::cos(lat) * std::sin(lon));
-      if (q.z() <= 1e-3) return whole;
-      const Eigen::Vector2d px = view.projectCamera(q);
-      u0 = std::min(u0, px.x());
-      v0 = std::min(v0, px.y());
-      u1 = std::max(u1, px.x());
-      v1 = std::max(v1, px.y());
-    }
+  for (const Eigen::Vector3d& q : points_camera) {
+    if (q.z() <= 1e-3) return whole;
+    const Eigen::Vector2d px = view.projectCamera(q);
+    u0 = std::min(u0, px.x());
+    v0 = std::min(v0, px.y());
+    u1 = std::max(u1, px.x());
+    v1 = std::max(v1, px.y());
   }
-  const double pad = 2 + 0.1 * std::max(u1 - u0, v1 - v0);
+  const double pad = 2 + pad_share * std::max(u1 - u0, v1 - v0);
   const cv::Point top_left(static_cast<int>(std::floor(std::max(u0 - pad, -1.0))),
                            static_cast<int>(std::floor(std::max(v0 - pad, -1.0))));
   const cv::Point bottom_right(static_cast<int>(std::ceil(std::min(u1 + pad, view.width + 1.0))),
                                static_cast<int>(std::ceil(std::min(v1 + pad, view.height + 1.0))));
   return cv::Rect(top_left, bottom_right) & whole;
+}
+
+// Pixel rectangle that holds the image of a sphere of radius r around p (head frame): the
+// projections of a slightly larger sphere's surface, padded.
+cv::Rect boundingRect(const CameraView& view, const Eigen::Vector3d& p, double r) {
+  const Eigen::Vector3d pc = view.toCamera(p);
+  if (pc.z() + r <= 0) return {};
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i <= 8; ++i) {
+    const double lat = M_PI * i / 8 - M_PI / 2;
+    for (int j = 0; j < 16; ++j) {
+      const double lon = 2 * M_PI * j / 16;
+      points.push_back(pc + 1.25 * r *
+                                Eigen::Vector3d(std::cos(lat) * std::cos(lon), std::sin(lat),
+                                                std::cos(lat) * std::sin(lon)));
+    }
+  }
+  return projectedRect(view, points, 0.1);
+}
+
+// Pixel rectangle that holds the shadow on the floor y = floor_y of a sphere of radius r around
+// p (head frame) in the light from to_light (unit, to_light.y() < 0): the shadow lies within the
+// circle of radius r / |to_light.y()| around where the ray from p away from the light meets the
+// floor; the projections of a polygon around that circle, padded. Empty when all of the sphere is
+// under the floor; the whole image when the polygon reaches behind the camera.
+cv::Rect shadowRect(const CameraView& view, const Eigen::Vector3d& p, double r,
+                    const Eigen::Vector3d& to_light, double floor_y) {
+  if (p.y() - r >= floor_y) return {};
+  const Eigen::Vector3d foot = p + (floor_y - p.y()) / to_light.y() * to_light;
+  constexpr int kSides = 16;
+  // Around the circle (the polygon's edges touch a 5 % larger one).
+  const double reach_m = 1.05 * r / -to_light.y() / std::cos(M_PI / kSides);
+  std::vector<Eigen::Vector3d> points;
+  for (int j = 0; j < kSides; ++j) {
+    const double a = 2 * M_PI * j / kSides;
+    points.push_back(view.toCamera(foot + reach_m * Eigen::Vector3d(std::cos(a), 0, std::sin(a))));
+  }
+  return projectedRect(view, points, 0.05);
 }
 
 }  // namespace
@@ -226,7 +256,8 @@ Renderer::BackgroundKey Renderer::backgroundKey(const CameraView& view) const {
           scene_.backdrop_distance_m,
           scene_.floor_height_m,
           scene_.texture_m_per_texel,
-          scene_.chessboard};
+          scene_.chessboard,
+          scene_.posters};
 }
 
 bool Renderer::sameBackground(const BackgroundKey& a, const BackgroundKey& b) {
@@ -241,7 +272,7 @@ bool Renderer::sameBackground(const BackgroundKey& a, const BackgroundKey& b) {
          a.rotation_head_camera == b.rotation_head_camera &&
          a.position_head_m == b.position_head_m && a.backdrop_distance_m == b.backdrop_distance_m &&
          a.floor_height_m == b.floor_height_m && a.texture_m_per_texel == b.texture_m_per_texel &&
-         same_board;
+         same_board && a.posters == b.posters;
 }
 
 void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
@@ -278,11 +309,18 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
   cv::Mat* background_image = keep_background || !draw_background ? &background_ : bgr;
   const size_t n = scene_.objects.size();
   objects_.resize(n);
+  to_light_ = scene_.light.toLightAt(t_s);
+  // Shadows only from a light above the horizon (a light at the horizon casts them to infinity).
+  const bool shadows = scene_.light.shadows && to_light_.y() < -1e-3;
   for (size_t i = 0; i < n; ++i) {
     const SceneObject& object = scene_.objects[i];
     ObjectFrame& o = objects_[i];
     const Eigen::Vector3d centre = object.trajectory.position(t_s);
+    o.centre = centre;
     o.rect = boundingRect(view, centre, object.boundingRadius());
+    o.shadow_rect = shadows ? shadowRect(view, centre, object.boundingRadius(), to_light_,
+                                         scene_.floor_height_m)
+                            : cv::Rect();
     o.oc = view.position_head_m - centre;
     o.box_to_head = object.rotationHeadObject(t_s);
     o.oc_box = o.box_to_head.transpose() * o.oc;
@@ -297,12 +335,14 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
                                                  cv::Size(2 * kEdgeCells + 1, 2 * kEdgeCells + 1)));
     }
   }
-  // The rows any object may cover: a still view's bands need no rays outside them.
+  // The rows any object or its shadow may cover: a still view's bands need no rays outside them.
   int object_row0 = rows, object_row1 = 0;
   for (const ObjectFrame& o : objects_) {
-    if (o.rect.empty()) continue;
-    object_row0 = std::min(object_row0, o.rect.y);
-    object_row1 = std::max(object_row1, o.rect.y + o.rect.height);
+    for (const cv::Rect& r : {o.rect, o.shadow_rect}) {
+      if (r.empty()) continue;
+      object_row0 = std::min(object_row0, r.y);
+      object_row1 = std::max(object_row1, r.y + r.height);
+    }
   }
   // Per band, per object: footprint and shown pixels; summed in band order below.
   band_counts_.assign(2 * n * static_cast<size_t>(bands), 0);
@@ -325,6 +365,9 @@ void Renderer::render(const CameraView& view, double t_s, cv::Mat* bgr,
             cv::Mat out = bgr->rowRange(row0, row1);
             background_.rowRange(row0, row1).copyTo(out);
           }
+          // Shadows move with the objects and the light: on the image, never the kept background,
+          // and under the objects drawn next.
+          if (shadows) drawShadows(view, rays, row0, row1, bgr);
           // Objects start from the background's depth and no owner, where they may draw.
           const cv::Rect rows_rect(0, row0, cols, row1 - row0);
           for (const ObjectFrame& o : objects_) {
@@ -428,7 +471,147 @@ void Renderer::drawBackground(const CameraView& view, const RayRows& rays,
   cv::Mat out = bgr->rowRange(row0, row1);
   cv::remap(atlas_, out, map_xy_.rowRange(row0, row1), map_frac_.rowRange(row0, row1),
             cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(200, 190, 180));
+  if (!scene_.posters.empty()) drawPosters(view, rays, row0, row1, bgr);
   if (scene_.chessboard.present) drawChessboard(view, rays, board_rect, row0, row1, bgr);
+}
+
+void Renderer::drawShadows(const CameraView& view, const RayRows& rays, int row0, int row1,
+                           cv::Mat* bgr) {
+  const Eigen::Matrix3d& R = view.rotation_head_camera;
+  const Eigen::Vector3d& C = view.position_head_m;
+  const double yf = scene_.floor_height_m;
+  const double keep = 1 - scene_.light.shadow_depth;
+  const cv::Rect rows_rect(0, row0, view.width, row1 - row0);
+  const size_t n = objects_.size();
+  for (size_t i = 0; i < n; ++i) {
+    const cv::Rect r = objects_[i].shadow_rect & rows_rect;
+    for (int v = r.y; v < r.y + r.height; ++v) {
+      const cv::Vec2f* ray_row = rays.row(v);
+      const cv::Vec2s* xy_row = map_xy_.ptr<cv::Vec2s>(v);
+      const float* depth_row = background_depth_.ptr<float>(v);
+      cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+      for (int u = r.x; u < r.x + r.width; ++u) {
+        // A pixel in several objects' rectangles is the first one's: darkened once.
+        bool earlier = false;
+        for (size_t j = 0; j < i && !earlier; ++j) {
+          earlier = objects_[j].shadow_rect.contains({u, v});
+        }
+        // Only where drawBackground drew the floor (its atlas rows) and nothing of the background
+        // (the chessboard) stands in front of it.
+        if (earlier || xy_row[u][1] <= kTextureSize) continue;
+        const Eigen::Vector3d d = R * Eigen::Vector3d(ray_row[u][0], ray_row[u][1], 1.0);
+        if (!(d.y() > 0)) continue;
+        const double tf = (yf - C.y()) / d.y();
+        if (!(tf > 0) || depth_row[u] < tf * (1 - 1e-3)) continue;
+        const Eigen::Vector3d p = C + tf * d;
+        for (size_t j = i; j < n; ++j) {
+          if (!objects_[j].shadow_rect.contains({u, v}) ||
+              !blocksLight(scene_.objects[j], objects_[j], p)) {
+            continue;
+          }
+          for (int k = 0; k < 3; ++k) out[u][k] = cv::saturate_cast<uchar>(out[u][k] * keep);
+          break;
+        }
+      }
+    }
+  }
+}
+
+bool Renderer::blocksLight(const SceneObject& object, const ObjectFrame& frame,
+                           const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d& l = to_light_;
+  const Eigen::Vector3d o = p - frame.centre;
+  switch (object.shape) {
+    case SceneObject::Shape::kSphere: {
+      // |o + s l| = r for some s > 0 (l unit): the far root ahead.
+      const double b = o.dot(l), c = o.squaredNorm() - object.radius_m * object.radius_m;
+      const double disc = b * b - c;
+      return disc >= 0 && -b + std::sqrt(disc) > 0;
+    }
+    case SceneObject::Shape::kBox: {
+      const Eigen::Vector3d q = frame.box_to_head.transpose() * o;
+      const Eigen::Vector3d dq = frame.box_to_head.transpose() * l;
+      double s_near = 0, s_far = 1e30;  // ahead of the floor point only
+      for (int k = 0; k < 3; ++k) {
+        const double h = object.half_extents_m[k];
+        if (std::abs(dq[k]) < 1e-12) {
+          if (std::abs(q[k]) > h) return false;
+          continue;
+        }
+        double s0 = (-h - q[k]) / dq[k], s1 = (h - q[k]) / dq[k];
+        if (s0 > s1) std::swap(s0, s1);
+        s_near = std::max(s_near, s0);
+        s_far = std::min(s_far, s1);
+      }
+      return s_near <= s_far;
+    }
+    case SceneObject::Shape::kPerson: {
+      // The figure's own outline: where the way to the light crosses its plane, its alpha.
+      const Eigen::Vector3d q = frame.box_to_head.transpose() * o;
+      const Eigen::Vector3d dq = frame.box_to_head.transpose() * l;
+      if (std::abs(dq.z()) < 1e-12) return false;
+      const double s = -q.z() / dq.z();
+      if (s <= 0) return false;
+      const Eigen::Vector3d at = q + s * dq;
+      const cv::Mat& picture = frame.picture;
+      const int col =
+          static_cast<int>(std::floor((at.x() / (object.height_m / 2) + 0.5) * picture.cols));
+      const int row = static_cast<int>(std::floor((at.y() / object.height_m + 0.5) * picture.rows));
+      return col >= 0 && row >= 0 && col < picture.cols && row < picture.rows &&
+             picture.at<cv::Vec4b>(row, col)[3] >= 128;
+    }
+  }
+  return false;
+}
+
+void Renderer::drawPosters(const CameraView& view, const RayRows& rays, int row0, int row1,
+                           cv::Mat* bgr) {
+  const Eigen::Matrix3d& R = view.rotation_head_camera;
+  const Eigen::Vector3d& C = view.position_head_m;
+  const double zb = scene_.backdrop_distance_m;
+  // Where a ray meets the backdrop plane (x, y); false when the plane is not ahead along it.
+  auto meet = [&](const cv::Vec2f& ray, Eigen::Vector2d* xy) {
+    const Eigen::Vector3d d = R * Eigen::Vector3d(ray[0], ray[1], 1);
+    const double t = (zb - C.z()) / d.z();
+    if (!(d.z() > 0 && t > 0)) return false;
+    *xy = {C.x() + t * d.x(), C.y() + t * d.y()};
+    return true;
+  };
+  // Most pixels of a view with small posters are passed over with four comparisons.
+  const size_t n = std::min(scene_.posters.size(), Poster::kMax);
+  std::array<RayBox, Poster::kMax> boxes;
+  RayBox any;
+  for (size_t i = 0; i < n; ++i) {
+    boxes[i] = RayBox::of(scene_.posters[i], view, zb);
+    any.add(boxes[i]);
+  }
+  for (int v = row0; v < row1; ++v) {
+    const cv::Vec2f* ray_row = rays.row(v);
+    const cv::Vec2s* xy_row = map_xy_.ptr<cv::Vec2s>(v);
+    cv::Vec3b* out = bgr->ptr<cv::Vec3b>(v);
+    for (int u = 0; u < view.width; ++u) {
+      const cv::Vec2f& ray = ray_row[u];
+      if (!any.contains(ray[0], ray[1])) continue;
+      // Only where drawBackground drew the backdrop: its atlas rows, not the floor's or the sky.
+      if (xy_row[u][1] < 0 || xy_row[u][1] > kTextureSize) continue;
+      Eigen::Vector2d p;
+      bool met = false;
+      // The last poster in the list is in front.
+      for (size_t i = n; i-- > 0;) {
+        if (!boxes[i].contains(ray[0], ray[1])) continue;
+        if (!met && !(met = meet(ray, &p))) break;
+        const Poster& poster = scene_.posters[i];
+        if (!poster.contains(p.x(), p.y())) continue;
+        // A photograph's pixel: its footprint, the distance to its neighbour's point.
+        Eigen::Vector2d q = p;
+        if (poster.isPhotograph()) {
+          meet(ray_row[u + 1 < view.width ? u + 1 : std::max(0, u - 1)], &q);
+        }
+        out[u] = poster.shade(p.x(), p.y(), (q - p).norm(), out[u]);
+        break;
+      }
+    }
+  }
 }
 
 std::array<cv::Point, Renderer::kSubRays * Renderer::kSubRays> Renderer::subRayCells(
@@ -639,7 +822,7 @@ int64_t Renderer::drawObject(const SceneObject& object, const ObjectFrame& frame
       }
       out_depth[u] = static_cast<float>(t);
       out_owner[u] = index;
-      out[u] = shade(object.color_bgr, normal);
+      out[u] = shade(object.color_bgr, normal, to_light_);
       if (object.textured) {
         // Four times finer than the backdrop: objects are small, and the texture's coarse
         // scales would only shade them.

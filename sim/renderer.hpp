@@ -16,9 +16,10 @@ class Renderer {
  public:
   explicit Renderer(const Scene& scene);
 
-  // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise). With
-  // visible_fraction: each scene object's share of its pixels in the image that no nearer
-  // object (or the chessboard) hides; 0 where it has none in the image.
+  // Renders the scene at time t_s into an 8-bit BGR image of the view's size (no noise), the
+  // objects shaded by the light's direction at t_s and, with the light's shadows, their shadows
+  // on the floor. With visible_fraction: each scene object's share of its pixels in the image
+  // that no nearer object (or the chessboard) hides; 0 where it has none in the image.
   // On all of OpenCV's threads (cv::setNumThreads), in bands of rows: every pixel is computed
   // alone, so image and fractions are byte-identical for any thread or band count.
   void render(const CameraView& view, double t_s, cv::Mat* bgr,
@@ -53,7 +54,7 @@ class Renderer {
   };
   const RayGrid& rayGrid(const CameraView& view);
   static RayRows interpolateRays(const RayGrid& grid, int row0, int row1, RayScratch* scratch);
-  // What the background (floor, backdrop, chessboard) was last drawn for.
+  // What the background (floor, backdrop, posters, chessboard) was last drawn for.
   struct BackgroundKey {
     int width = 0, height = 0;
     Intrinsics intrinsics;
@@ -61,10 +62,13 @@ class Renderer {
     Eigen::Vector3d position_head_m;
     double backdrop_distance_m = 0, floor_height_m = 0, texture_m_per_texel = 0;
     Chessboard chessboard;
+    std::vector<Poster> posters;
   };
   // An object at this frame's time: what every band needs of it.
   struct ObjectFrame {
-    cv::Rect rect;  // pixels its image may cover
+    cv::Rect rect;         // pixels its image may cover
+    cv::Rect shadow_rect;  // pixels its shadow on the floor may cover (none without shadows)
+    Eigen::Vector3d centre;
     Eigen::Vector3d oc, oc_box;
     Eigen::Matrix3d box_to_head;
     cv::Mat picture;  // a person's figure at this time: BGRA, colours premultiplied by alpha
@@ -108,6 +112,14 @@ class Renderer {
                      const CameraView& view, const RayRows& rays, int v0, int v1, cv::Mat* bgr);
   void drawChessboard(const CameraView& view, const RayRows& rays, const cv::Rect& rect, int row0,
                       int row1, cv::Mat* bgr);
+  // The posters over rows [row0, row1) of the backdrop just drawn (not over the floor).
+  void drawPosters(const CameraView& view, const RayRows& rays, int row0, int row1, cv::Mat* bgr);
+  // The objects' shadows over rows [row0, row1) of the floor in bgr (the background copied, the
+  // objects not drawn yet): within the objects' shadow_rect only.
+  void drawShadows(const CameraView& view, const RayRows& rays, int row0, int row1, cv::Mat* bgr);
+  // Whether the object blocks the way from the floor point p toward the light.
+  bool blocksLight(const SceneObject& object, const ObjectFrame& frame,
+                   const Eigen::Vector3d& p) const;
 
   const Scene& scene_;
   cv::Mat atlas_;                      // backdrop and floor textures, BGR8
@@ -118,6 +130,7 @@ class Renderer {
   bool background_drawn_ = false, background_kept_ = false;
   BackgroundKey background_key_;
   std::vector<ObjectFrame> objects_;  // this frame's
+  Eigen::Vector3d to_light_;          // this frame's direction toward the light
   std::vector<int64_t> band_counts_;  // per band, per object: footprint and shown pixels
   std::vector<RayGrid> grids_;        // the last few intrinsics', newest last
   cv::Mat rays_;                      // rays()'s

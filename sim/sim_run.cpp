@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <utility>
 
 #include "common/freshness.hpp"
@@ -55,14 +56,26 @@ void declareSimSceneParams(Params& p) {
   p.add("onvif_clock_offset_s", 0.0, "s",
         "the ONVIF cameras' clock minus the host's (clients must correct for it)",
         Range::between(-1e9, 1e9));
-  p.addSection("scene",
-               "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
-               "texture_seed (7), light (off): {brightness_s and brightness (keyframes of the "
-               "scene's brightness, linear between), mains_hz and flicker_depth (lamps flickering "
-               "at twice the mains' frequency, dipping by the depth), vignetting (the corners' "
-               "light lost, as the radius squared, 0 .. 0.9), auto_exposure_target (the mean grey "
-               "the cameras' exposure steers to; 0: off), auto_exposure_time_constant_s (0.5), "
-               "auto_exposure_max_gain (8)}");
+  p.addSection(
+      "scene",
+      "backdrop_distance_m (8), floor_height_m (1.4), texture_m_per_texel (0.01), "
+      "texture_seed (7), light (off): {brightness_s and brightness (keyframes of the "
+      "scene's brightness, linear between), mains_hz and flicker_depth (lamps flickering "
+      "at twice the mains' frequency, dipping by the depth), vignetting (the corners' "
+      "light lost, as the radius squared, 0 .. 0.9), auto_exposure_target (the mean grey "
+      "the cameras' exposure steers to; 0: off), auto_exposure_time_constant_s (0.5), "
+      "auto_exposure_max_gain (8), tint_bgr (the light's colour, gains on the channels, "
+      "[1, 1, 1]), auto_white_balance_time_constant_s (the cameras' grey-world white "
+      "balance; 0: off), direction_s and direction (keyframes of the direction toward the "
+      "light, head frame, y down: [[x, y, z], ...], each normalised, interpolated between; "
+      "[-0.3, -0.8, -0.5]: above, left of and behind the cameras), shadows (false; true: the "
+      "objects' shadows on the floor), shadow_depth (0.55: the share of the light a shadow "
+      "takes, 0 .. 1)}, posters (at most 16 on the backdrop, the later in front): "
+      "[{centre_m: [x, y] and size_m: [width, height] on the backdrop plane, color_bgr "
+      "(reflectance) or image (a photograph stretched over it; relative to the config "
+      "file's folder), brightness (1; a lit window 3, 0 .. 10)}], camera (an instant): "
+      "{exposure_s (0 .. 0.2: motion blur over the exposure, centred on each frame's time), "
+      "blur_samples (5, 2 .. 16: renders averaged over it)}");
   p.addSection("objects",
                "list of {name, class, shape: sphere|box|person, radius_m | half_extents_m | "
                "height_m (person, 1.75), yaw_rad (box, person) and yaw_rate_rad_s (box, about the "
@@ -82,8 +95,10 @@ void declareSimSceneParams(Params& p) {
 std::unique_ptr<Simulator> simulatorFromParams(const Params& p) {
   const std::string where =
       p.configPath().empty() ? "flags" : "config file '" + p.configPath() + "'";
-  Scene scene =
-      Scene::fromConfig(p.section("scene"), p.section("objects"), p.section("chessboard"), where);
+  const std::string config_dir =
+      p.configPath().empty() ? "" : std::filesystem::path(p.configPath()).parent_path().string();
+  Scene scene = Scene::fromConfig(p.section("scene"), p.section("objects"), p.section("chessboard"),
+                                  where, config_dir);
   return std::make_unique<Simulator>(rigFromParams(p), std::move(scene), plantParamsFrom(p),
                                      p.getDouble("noise_sigma"),
                                      static_cast<unsigned>(p.getInt("seed")));

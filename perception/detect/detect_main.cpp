@@ -61,6 +61,15 @@ class DetectNode {
       return;
     }
     status_.setCounters(pipeline_.counters());
+    // A class whose object's colour leaves its configured range: the user's config needs a look.
+    const std::string& appearance = pipeline_.appearanceWarning();
+    if (appearance != appearance_) {
+      appearance_ = appearance;
+      status_.setState(appearance.empty() ? ptzstereo::process_status_t::STATE_OK
+                                          : ptzstereo::process_status_t::STATE_WARN,
+                       appearance);
+    }
+    if (!appearance.empty()) log_.warn("appearance", "ptz-detect: " + appearance);
     if (!out.click_note.empty()) {
       std::fprintf(stderr, "ptz-detect: click: %s\n", out.click_note.c_str());
     }
@@ -114,6 +123,7 @@ class DetectNode {
   FrameIntake intake_;
   FreshnessGate select_gate_;
   DetectPipeline pipeline_;
+  std::string appearance_;  // the appearance warning in the status
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
   std::unique_ptr<SafeSubscription<ptzstereo::target_select_t>> selects_;
 };

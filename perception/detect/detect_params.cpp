@@ -11,6 +11,38 @@ void declareDetectParams(Params& p) {
         "class of the object of interest until TARGET_SELECT says otherwise");
   p.add("filter_size_px", 3, "px", "median filter size (odd)", Range::between(1, 99));
   p.add("morph_size_px", 3, "px", "opening/closing kernel size", Range::between(1, 99));
+  const ColorAdaptParams a;
+  p.add(
+      "color_intensity_min_fraction", a.intensity_min_fraction, "",
+      "colour classes: a pixel needs only this share of the intensity of the class's bright "
+      "pixels (95th percentile in the part scanned) when that is below the class's "
+      "intensity_min, so the shaded side of an object in dim light stays (0: intensity_min alone)",
+      Range::between(0, 1));
+  p.add("color_intensity_floor", a.intensity_floor, "grey levels",
+        "colour classes: the relative intensity limit never goes below this (the sensor's noise)",
+        Range::between(0, 255));
+  p.add("color_follow", a.follow,
+        "colour classes: the target's hue is learned from its confirmed regions and the class "
+        "narrowed to it (inside its configured window), so clutter of a near hue does not merge "
+        "with it");
+  p.add("color_follow_sigmas", a.follow_sigmas, "",
+        "colour follow: the hue kept, in sigmas of the target's hue spread", Range::above(0));
+  p.add("color_follow_min_halfwidth_deg", a.follow_min_halfwidth_deg, "deg",
+        "colour follow: the hue kept is never narrower than this either side",
+        Range::between(0, 180));
+  p.add("color_follow_noise_grey", a.follow_noise_grey, "grey levels",
+        "colour follow: the sensor's noise; the hue kept widens by its hue noise at each pixel's "
+        "chroma (the dark side of an object)",
+        Range::between(0, 50));
+  p.add("color_follow_learning_rate", a.follow_learning_rate, "",
+        "colour follow: the share of a confirmed region's hue learned per frame",
+        Range::between(0, 1));
+  p.add("color_follow_min_updates", a.follow_min_updates, "frames",
+        "colour follow: confirmed regions learned before the hue gate applies",
+        Range::between(1, 1000));
+  p.add("color_follow_forget_s", a.follow_forget_s, "s",
+        "colour follow: without a confirmed region this long, the class is its window again",
+        Range::above(0));
   p.add("max_epipolar_px", 3.0, "px",
         "largest distance of a left/right match from its epipolar line", Range::above(0));
   p.add("max_area_ratio", 2.0, "", "largest left/right area ratio of a match", Range::atLeast(1));
@@ -215,6 +247,16 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
       DetectorParams::fromConfig(p.section("classes"), "config file '" + p.configPath() + "'");
   c.detector.filter_size_px = p.getInt("filter_size_px");
   c.detector.morph_size_px = p.getInt("morph_size_px");
+  ColorAdaptParams& a = c.detector.adapt;
+  a.intensity_min_fraction = p.getDouble("color_intensity_min_fraction");
+  a.intensity_floor = p.getDouble("color_intensity_floor");
+  a.follow = p.getBool("color_follow");
+  a.follow_sigmas = p.getDouble("color_follow_sigmas");
+  a.follow_min_halfwidth_deg = p.getDouble("color_follow_min_halfwidth_deg");
+  a.follow_learning_rate = p.getDouble("color_follow_learning_rate");
+  a.follow_noise_grey = p.getDouble("color_follow_noise_grey");
+  a.follow_min_updates = p.getInt("color_follow_min_updates");
+  a.follow_forget_s = p.getDouble("color_follow_forget_s");
   if (c.detector.filter_size_px % 2 == 0) throw p.invalid("filter_size_px", "must be odd");
   const std::string markers_path = p.getString("markers_config");
   if (markers_path.empty()) {

@@ -106,7 +106,8 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
       windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()),
       markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}),
       people_(config_.people, config_.people_scan, {rig_.left.width, rig_.left.height}),
-      clicked_(config_.clicked) {}
+      clicked_(config_.clicked),
+      color_models_(config_.detector.classes.size()) {}
 
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
                              std::string* why) {
@@ -124,6 +125,13 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   // Windows around the tracks' predicted images, or the whole frames; decoding only what is
   // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
   ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
+  if (config_.detector.adapt.follow) {
+    std::vector<HueGate> gates;
+    for (const ColorModel& model : color_models_) {
+      gates.push_back(model.gate(t_s, config_.detector.adapt));
+    }
+    detector_.setGates(std::move(gates));
+  }
   std::vector<Region> lr, rr;
   FramePixels left_pixels(m.left), right_pixels(m.right);
   if (!windows_.detect(detector_, &plan, left_pixels.pixels(), right_pixels.pixels(), &lr, &rr,
@@ -179,6 +187,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   tracker_.update(t_s, measurements);
   tracker_.updateFromViews(t_s, one_view, lv, rv);
   const int64_t target_id = chooseTarget(t_s, &out->target_reason_changed);
+  learnColour(t_s, target_id, objects, lr, rr);
   recent_views_.push_back({m.seq, {lv, rv}});
   if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   processing_ms_.push_back(
@@ -344,6 +353,35 @@ void DetectPipeline::setTrackAndScanCounters() {
   for (const Counts* counts :
        {&markers_.counts(), &people_.counts(), static_cast<const Counts*>(&scan_errors_)}) {
     for (const auto& [name, n] : *counts) counters_[name] = n;
+  }
+}
+
+void DetectPipeline::learnColour(double t_s, int64_t target_id,
+                                 const std::vector<StereoObject>& objects,
+                                 const std::vector<Region>& lr, const std::vector<Region>& rr) {
+  appearance_warning_.clear();
+  const Track* target = tracker_.find(target_id);
+  if (target == nullptr || target->object_index < 0 ||
+      static_cast<size_t>(target->object_index) >= objects.size()) {
+    return;
+  }
+  const StereoObject& o = objects[static_cast<size_t>(target->object_index)];
+  const auto k = static_cast<size_t>(o.class_index);
+  if (k >= color_models_.size()) return;
+  ColorModel& model = color_models_[k];
+  // Whole regions only (a split disc or a region cut by its window is not measured).
+  for (const Region* r : {&lr[static_cast<size_t>(o.left)], &rr[static_cast<size_t>(o.right)]}) {
+    model.learn(r->colour, t_s, config_.detector.adapt);
+  }
+  const ColorClass& c = config_.detector.classes[k];
+  const HueGate gate = model.gate(t_s, config_.detector.adapt);
+  counters_["color_" + c.name + "_hue_offset_cdeg"] = std::lround(model.hueOffsetDeg() * 100);
+  counters_["color_" + c.name + "_gate_halfwidth_cdeg"] =
+      gate.active ? std::lround(gate.halfwidth_deg * 100) : 0;
+  const std::string out = model.outOfRange(c, config_.detector.adapt);
+  if (!out.empty()) {
+    appearance_warning_ = "class " + c.name + ": " + out;
+    ++counters_["appearance_out_of_range_frames"];
   }
 }
 

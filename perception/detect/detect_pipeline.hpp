@@ -79,6 +79,9 @@ class DetectPipeline {
   // late_updates, late_starts, late_dropped, discoveries_failed and every 30
   // discovery_us_p50/_p99.
   const std::map<std::string, int64_t>& counters() const { return counters_; }
+  // Where the target's colour class's appearance, as last seen, leaves its configured range
+  // (ColorModel::outOfRange, with the class's name); "" when it does not, or no colour target.
+  const std::string& appearanceWarning() const { return appearance_warning_; }
 
  private:
   // The yaw of each trusted box (by object; not ok for the others), at most
@@ -106,6 +109,10 @@ class DetectPipeline {
                     const std::optional<PatchObject>& clicked, const CameraView& lv,
                     FrameOutputs* out) const;
   void setCounters(int64_t target_id, int64_t target_index);
+  // The target's colour class learns the colour of its regions in this frame (color_follow, or
+  // for the appearance status); counters color_* and appearance_out_of_range_frames.
+  void learnColour(double t_s, int64_t target_id, const std::vector<StereoObject>& objects,
+                   const std::vector<Region>& lr, const std::vector<Region>& rr);
   // The tracker's counts, the scanners' and their errors into counters_.
   void setTrackAndScanCounters();
 
@@ -132,6 +139,8 @@ class DetectPipeline {
   std::map<std::string, int64_t> scan_errors_;  // marker_errors, people_errors
   std::vector<double> orientation_us_;
   std::map<std::string, int64_t> counters_;
+  std::vector<ColorModel> color_models_;  // by colour class index
+  std::string appearance_warning_;
 };
 
 }  // namespace ptz::perception

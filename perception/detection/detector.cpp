@@ -3,6 +3,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 
@@ -174,7 +175,14 @@ Detector::Detector(DetectorParams params)
   if (params_.classes.size() > DetectorParams::kMaxClasses) {
     throw ConfigError("at most " + std::to_string(DetectorParams::kMaxClasses) + " colour classes");
   }
-  for (const auto& c : params_.classes) templates_.push_back(templateMoments(c.shape));
+  for (const auto& c : params_.classes) {
+    templates_.push_back(templateMoments(c.shape));
+    hue_centre_deg_.push_back(hueWindowCentreDeg(c.hue_min_deg, c.hue_max_deg));
+  }
+  const ColorAdaptParams& adapt = params_.adapt;
+  hue_tenths_.assign(size_t{511} * 1021, 0);
+  hue_noise_deg_per_chroma_ =
+      adapt.follow_sigmas * std::sqrt(1.5) * adapt.follow_noise_grey * 180 / M_PI;
   // The class bits of every hue pair and every (min, sum) pair once, then one AND per colour:
   // the same table as inWindow on toHsi of each colour, in ~0.1 s instead of ~1.5 s, so that a
   // restarted ptz-detect is back within a frame or two.
@@ -183,9 +191,14 @@ Detector::Detector(DetectorParams params)
   std::vector<uint8_t> hue_bits(size_t{511} * kHueCols, 0), level_bits(size_t{256} * kSums, 0);
   uint8_t grey_bits = 0;
   for (size_t k = 0; k < params_.classes.size(); ++k) {
-    const ColorClass& c = params_.classes[k];
+    ColorClass c = params_.classes[k];
     const auto bit = static_cast<uint8_t>(1u << k);
     if (greyInClass(c)) grey_bits |= bit;
+    // A relative limit is applied per scanned part (adaptLabels); the table keeps the floor.
+    if (adapt.intensity_min_fraction > 0 && !greyInClass(c)) {
+      c.intensity_min = std::min(c.intensity_min, adapt.intensity_floor);
+      relative_bits_ |= bit;
+    }
     for (int mn = 0; mn < 256; ++mn) {
       for (int sum = 3 * mn; sum < kSums; ++sum) {
         if (inLevels(c, saturationOf(mn, sum), intensityOf(sum)))
@@ -201,6 +214,8 @@ Detector::Detector(DetectorParams params)
         if (inHue(params_.classes[k], h)) bits |= static_cast<uint8_t>(1u << k);
       }
       hue_bits[(gb + 255) * kHueCols + rgb + 510] = bits;
+      hue_tenths_[(gb + 255) * kHueCols + rgb + 510] =
+          static_cast<uint16_t>(std::lround(h * 10) % 3600);
     }
   }
   class_table_.assign(size_t{1} << 24, 0);
@@ -233,6 +248,115 @@ void Detector::label(const cv::Mat& bgr, cv::Mat* labels) const {
     for (int c = 0; c < bgr.cols; ++c, in += 3)
       out[c] = table[(in[2] << 16) | (in[1] << 8) | in[0]];
   }
+}
+
+double Detector::hueDegOf(uchar b, uchar g, uchar r) const {
+  return 0.1 * hue_tenths_[static_cast<size_t>((g - b + 255) * 1021 + 2 * r - g - b + 510)];
+}
+
+void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
+  const size_t n = params_.classes.size();
+  uint8_t gated_bits = 0;
+  for (size_t k = 0; k < std::min(n, gates_.size()); ++k) {
+    if (gates_[k].active && !greyInClass(params_.classes[k])) gated_bits |= 1u << k;
+  }
+  const uint8_t adaptive = relative_bits_ | gated_bits;
+  if (adaptive == 0) return;
+  constexpr int kSums = 766;
+  // The relative limits: each class's bright level, the 95th percentile of its pixels' sums.
+  std::array<double, DetectorParams::kMaxClasses> min_sum{};
+  if (relative_bits_ != 0) {
+    std::vector<int> histogram(n * kSums, 0);
+    for (int y = 0; y < bgr.rows; ++y) {
+      const uchar* in = bgr.ptr<uchar>(y);
+      const uchar* l = labels->ptr<uchar>(y);
+      for (int x = 0; x < bgr.cols; ++x) {
+        const uint8_t bits = l[x] & relative_bits_;
+        if (bits == 0) continue;
+        const int sum = in[3 * x] + in[3 * x + 1] + in[3 * x + 2];
+        for (size_t k = 0; k < n; ++k) {
+          if (bits & (1u << k)) ++histogram[k * kSums + static_cast<size_t>(sum)];
+        }
+      }
+    }
+    constexpr int kMinPixels = 20;  // fewer: noise, not an object to take the light from
+    for (size_t k = 0; k < n; ++k) {
+      if (!(relative_bits_ & (1u << k))) continue;
+      const ColorClass& c = params_.classes[k];
+      const int* h = &histogram[k * kSums];
+      int total = 0;
+      for (int s = 0; s < kSums; ++s) total += h[s];
+      double limit = c.intensity_min;
+      if (total >= kMinPixels) {
+        int below = 0, s = 0;
+        while (s < kSums - 1 && below + h[s] < 0.95 * total) below += h[s++];
+        limit = std::clamp(params_.adapt.intensity_min_fraction * intensityOf(s),
+                           params_.adapt.intensity_floor, c.intensity_min);
+      }
+      min_sum[k] = 3 * limit;
+    }
+  }
+  for (int y = 0; y < bgr.rows; ++y) {
+    const uchar* in = bgr.ptr<uchar>(y);
+    uchar* l = labels->ptr<uchar>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      const uint8_t bits = l[x] & adaptive;
+      if (bits == 0) continue;
+      const uchar b = in[3 * x], g = in[3 * x + 1], r = in[3 * x + 2];
+      const int sum = b + g + r;
+      const bool grey = b == g && g == r;
+      double hue = 0, noise_deg = 180;
+      if ((bits & gated_bits) && !grey) {
+        hue = hueDegOf(b, g, r);
+        // The hue's own noise at this pixel's chroma (the length of HSI's chroma vector).
+        const double chroma = std::hypot(r - 0.5 * (g + b), 0.8660254 * (g - b));
+        noise_deg = hue_noise_deg_per_chroma_ / chroma;
+      }
+      for (size_t k = 0; k < n; ++k) {
+        const auto bit = static_cast<uint8_t>(1u << k);
+        if (!(bits & bit)) continue;
+        bool keep = !(relative_bits_ & bit) || sum >= min_sum[k];
+        if (keep && (gated_bits & bit)) {
+          const HueGate& gate = gates_[k];
+          keep = !grey && std::abs(hueDifferenceDeg(hue, hue_centre_deg_[k] + gate.offset_deg)) <=
+                              gate.halfwidth_deg + noise_deg;
+        }
+        if (!keep) l[x] &= static_cast<uint8_t>(~bit);
+      }
+    }
+  }
+}
+
+RegionColour Detector::measureColour(const cv::Mat& bgr, const cv::Mat& mask,
+                                     size_t class_index) const {
+  // Welford's running mean and variance: a region may hold a few thousand pixels.
+  RegionColour c;
+  double hue_m2 = 0, sat_m2 = 0;
+  int hue_n = 0;
+  for (int y = 0; y < bgr.rows; ++y) {
+    const uchar* in = bgr.ptr<uchar>(y);
+    const uchar* m = mask.ptr<uchar>(y);
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (m[x] == 0) continue;
+      const uchar b = in[3 * x], g = in[3 * x + 1], r = in[3 * x + 2];
+      const int sum = b + g + r;
+      ++c.pixels;
+      const double sat = saturationOf(std::min({b, g, r}), sum);
+      const double ds = sat - c.saturation;
+      c.saturation += ds / c.pixels;
+      sat_m2 += ds * (sat - c.saturation);
+      c.intensity += (intensityOf(sum) - c.intensity) / c.pixels;
+      if (b == g && g == r) continue;
+      const double off = hueDifferenceDeg(hueDegOf(b, g, r), hue_centre_deg_[class_index]);
+      ++hue_n;
+      const double dh = off - c.hue_offset_deg;
+      c.hue_offset_deg += dh / hue_n;
+      hue_m2 += dh * (off - c.hue_offset_deg);
+    }
+  }
+  if (c.pixels > 1) c.saturation_sigma = std::sqrt(sat_m2 / (c.pixels - 1));
+  if (hue_n > 1) c.hue_sigma_deg = std::sqrt(hue_m2 / (hue_n - 1));
+  return c;
 }
 
 cv::Mat Detector::maskFromLabels(const cv::Mat& labels, size_t index, cv::Rect* roi) const {
@@ -298,6 +422,7 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
   cv::Mat filtered, labels;
   cv::medianBlur(bgr, filtered, params_.filter_size_px);
   label(filtered, &labels);
+  adaptLabels(filtered, &labels);
   std::vector<Region> regions;
   for (size_t ci = 0; ci < params_.classes.size(); ++ci) {
     const ColorClass& c = params_.classes[ci];
@@ -358,6 +483,7 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
         }
         if (!shape_ok) continue;
       }
+      r.colour = measureColour(filtered(bbox), alone & m(bbox), ci);
       regions.push_back(r);
     }
     std::sort(regions.begin() + static_cast<ptrdiff_t>(first), regions.end(),

@@ -6,9 +6,11 @@
 #include <opencv2/core.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/config.hpp"
+#include "perception/detection/color_model.hpp"
 
 namespace ptz::perception {
 
@@ -36,6 +38,7 @@ struct DetectorParams {
   int filter_size_px = 3;                   // median filter (the paper's 3x3 mask)
   int morph_size_px = 3;                    // opening then closing
   std::vector<ColorClass> classes;
+  ColorAdaptParams adapt;  // relative intensity, the hue model (off by default)
 
   // Reads the config section `classes` (a list of maps with the fields of ColorClass).
   static DetectorParams fromConfig(const cv::FileNode& classes, const std::string& where);
@@ -61,6 +64,8 @@ struct Region {
   bool siblingOf(const Region& o) const {
     return split() && o.class_index == class_index && o.blob_bbox == blob_bbox;
   }
+  // Its colour (a whole region's; not measured for a split disc).
+  RegionColour colour;
 };
 
 // From Hu's first two invariants phi1, phi2: the shape invariant sqrt(phi1^2 - phi2) / 2, which
@@ -104,9 +109,18 @@ class Detector {
   // The segmentation mask of class `index` in a (filtered) BGR image, after clean-up.
   cv::Mat mask(const cv::Mat& bgr, size_t index) const;
   const DetectorParams& params() const { return params_; }
+  // The classes' hue gates (by class index; from their ColorModel), set between frames: a scan
+  // reads them, on both cores.
+  void setGates(std::vector<HueGate> gates) { gates_ = std::move(gates); }
 
  private:
   void label(const cv::Mat& bgr, cv::Mat* labels) const;
+  // The adaptive classes' pixels kept (ColorAdaptParams): the relative intensity limit of the
+  // scanned part, the hue gates.
+  void adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const;
+  // The colour of a region's pixels (mask: its pixels in bgr).
+  RegionColour measureColour(const cv::Mat& bgr, const cv::Mat& mask, size_t class_index) const;
+  double hueDegOf(uchar b, uchar g, uchar r) const;
   // A level's tests: the classes' area limits times these factors, the shape test or none.
   struct Limits {
     double min_area_factor = 1, max_area_factor = 1;
@@ -124,6 +138,12 @@ class Detector {
   // RGB -> HSI segmentation of every 24-bit colour, computed once: bit k set when the colour is
   // in class k (up to 8 classes). Exact, and one lookup per pixel instead of a conversion.
   std::vector<uint8_t> class_table_;
+  // Hue in tenths of a degree by (g - b, 2r - g - b), for the adaptive classes' pixels.
+  std::vector<uint16_t> hue_tenths_;
+  uint8_t relative_bits_ = 0;            // classes with a relative intensity limit
+  double hue_noise_deg_per_chroma_ = 0;  // the hue gate's widening times a pixel's chroma
+  std::vector<double> hue_centre_deg_;
+  std::vector<HueGate> gates_;
 };
 
 }  // namespace ptz::perception

@@ -259,17 +259,30 @@ SceneObject readObject(const cv::FileNode& n, const std::string& w) {
   return o;
 }
 
+// The scene section's `camera` map (absent: an instant).
+Shutter readShutter(const cv::FileNode& n, const std::string& where) {
+  Shutter shutter;
+  if (n.empty()) return shutter;
+  const std::string w = fieldPath(where, "camera");
+  checkFields(n, {"exposure_s", "blur_samples"}, w);
+  shutter.exposure_s = readDouble(n, "exposure_s", w, 0.0, Range::between(0, 0.2));
+  shutter.blur_samples =
+      n["blur_samples"].empty() ? 5 : readInt(n, "blur_samples", w, Range::between(2, 16));
+  return shutter;
+}
+
 }  // namespace
 
 Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& objects,
-                        const cv::FileNode& board, const std::string& where) {
+                        const cv::FileNode& board, const std::string& where,
+                        const std::string& base_dir) {
   Scene scene;
   if (!scene_node.empty()) {
     const std::string w = where + ", scene";
-    checkFields(
-        scene_node,
-        {"backdrop_distance_m", "floor_height_m", "texture_m_per_texel", "texture_seed", "light"},
-        w);
+    checkFields(scene_node,
+                {"backdrop_distance_m", "floor_height_m", "texture_m_per_texel", "texture_seed",
+                 "light", "posters", "camera"},
+                w);
     scene.backdrop_distance_m =
         readDouble(scene_node, "backdrop_distance_m", w, 8.0, Range::above(0.5));
     scene.floor_height_m = readDouble(scene_node, "floor_height_m", w, 1.4);
@@ -277,6 +290,8 @@ Scene Scene::fromConfig(const cv::FileNode& scene_node, const cv::FileNode& obje
         readDouble(scene_node, "texture_m_per_texel", w, 0.01, Range::above(0));
     scene.texture_seed = readSeed(scene_node, "texture_seed", w, scene.texture_seed);
     scene.light = Light::fromConfig(scene_node["light"], w);
+    scene.posters = readPosters(scene_node["posters"], w, base_dir);
+    scene.camera = readShutter(scene_node["camera"], w);
   }
   if (!objects.empty()) {
     if (!objects.isSeq()) throw ConfigError(where + ", objects: must be a list");

@@ -1,5 +1,6 @@
-// The simulated world in the head frame: a textured backdrop and floor, coloured objects on
-// trajectories, and an optional chessboard target for calibration.
+// The simulated world in the head frame: a textured backdrop with posters on it and a floor,
+// coloured objects on trajectories, and an optional chessboard target for calibration; its light
+// and the cameras' shutter.
 #pragma once
 
 #include <Eigen/Core>
@@ -10,6 +11,7 @@
 
 #include "common/config.hpp"
 #include "sim/scene/light.hpp"
+#include "sim/scene/posters.hpp"
 
 namespace ptz::sim {
 
@@ -89,6 +91,15 @@ struct Chessboard {
   std::vector<Eigen::Vector3d> innerCorners() const;
 };
 
+// The cameras' shutter: each image gathers the light of exposure_s centred on its capture time (a
+// frame's time is its exposure's middle), so what moves (an object, the view while a head turns)
+// smears; 0: an instant. The exposure is blur_samples renders at times spread evenly over it,
+// averaged.
+struct Shutter {
+  double exposure_s = 0;
+  int blur_samples = 5;
+};
+
 struct Scene {
   double backdrop_distance_m = 8.0;  // plane z = d
   double floor_height_m = 1.4;       // plane y = h (y points down)
@@ -96,11 +107,16 @@ struct Scene {
   unsigned texture_seed = 7;
   std::vector<SceneObject> objects;
   Chessboard chessboard;
-  Light light;  // off unless the scene section has `light`
+  Light light;                  // off unless the scene section has `light`
+  std::vector<Poster> posters;  // on the backdrop, the later ones in front
+  Shutter camera;               // the `camera` map: an instant unless exposure_s is set
 
   // Reads the config sections `scene`, `objects` and `chessboard`; errors name file and field.
+  // A poster's relative image path is from base_dir (the config file's folder; empty: the
+  // current directory).
   static Scene fromConfig(const cv::FileNode& scene, const cv::FileNode& objects,
-                          const cv::FileNode& chessboard, const std::string& where);
+                          const cv::FileNode& chessboard, const std::string& where,
+                          const std::string& base_dir = "");
 };
 
 }  // namespace ptz::sim

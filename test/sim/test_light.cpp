@@ -10,16 +10,14 @@
 #include "common/config.hpp"
 #include "common/rig.hpp"
 #include "sim/simulator.hpp"
+#include "support/sim/scene_text.hpp"
 
 using ptz::sim::Light;
 
 namespace {
 
 Light fromText(const std::string& light_map) {
-  const std::string path = std::string(::testing::TempDir()) + "/light.yaml";
-  std::ofstream(path) << "%YAML:1.0\n---\nscene:\n  light: " << light_map << "\n";
-  cv::FileStorage fs = ptz::openForRead(path, "config file");
-  return ptz::sim::Scene::fromConfig(fs["scene"], fs["objects"], fs["chessboard"], path).light;
+  return ptz::test::lightFromText(light_map);
 }
 
 }  // namespace
@@ -113,14 +111,7 @@ TEST(Light, AutoExposureBringsADimmedImageBackWithItsLag) {
 }
 
 TEST(Light, BadLightIsNamed) {
-  const auto message = [](const std::string& map) {
-    try {
-      fromText(map);
-    } catch (const ptz::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string("accepted");
-  };
+  const auto message = ptz::test::lightErrorOf;
   EXPECT_NE(message("{ brightness_s: [0, 1], brightness: [1] }").find("1 values for 2 times"),
             std::string::npos);
   EXPECT_NE(message("{ brightness_s: [2, 1], brightness: [1, 1] }").find("times must increase"),

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include "common/config.hpp"
 #include "sim/simulator.hpp"
@@ -34,8 +35,10 @@ int main(int argc, char** argv) {
   try {
     if (!p.parse(argc, argv)) return 0;
     const std::string where = "config file '" + p.configPath() + "'";
+    // A poster's photograph is found beside the config file, as ptz-sim finds it.
+    const std::string config_dir = std::filesystem::path(p.configPath()).parent_path().string();
     sim::Scene scene = sim::Scene::fromConfig(p.section("scene"), p.section("objects"),
-                                              p.section("chessboard"), where);
+                                              p.section("chessboard"), where, config_dir);
     const StereoRig rig = rigFromParams(p);
     PtzPlant::Params plant = axisLimitsFrom(p);
     for (auto& axis : plant.axis) {  // motors reach the pose at once (gain 1)

@@ -1,0 +1,242 @@
+// Colour detection in real light (issue #32): the relative intensity limit on a dimmed rendered
+// ball, the hue gate separating a ball from a poster of a near hue, the colour model's learning,
+// forgetting and appearance status, each against known answers.
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <optional>
+
+#include "perception/detection/color_model.hpp"
+#include "perception/detection/detector.hpp"
+#include "sim/simulator.hpp"
+#include "support/detect_scene.hpp"
+
+using ptz::PtzPose;
+using ptz::Side;
+using ptz::StereoRig;
+namespace perception = ptz::perception;
+namespace sim = ptz::sim;
+using ptz::test::defaultClasses;
+using ptz::test::kRed;
+using ptz::test::object;
+
+namespace {
+
+// The red ball at p, lit at `brightness` of the scene's light, both cameras straight ahead.
+sim::SimFrame renderLit(const StereoRig& rig, const Eigen::Vector3d& p, double brightness) {
+  sim::Scene scene;
+  scene.objects = {object("red_ball", sim::SceneObject::Shape::kSphere, p, kRed)};
+  if (brightness != 1) {
+    scene.light.brightness_s = {0.0};
+    scene.light.brightness = {brightness};
+  }
+  sim::Simulator s(rig, scene, ptz::defaultPlantParams(), 2.0, 3);
+  return s.capture();
+}
+
+// The one region of the red class (none when there are none or several).
+std::optional<perception::Region> onlyRed(const std::vector<perception::Region>& regions) {
+  std::optional<perception::Region> red;
+  for (const auto& r : regions) {
+    if (r.class_index != 0) continue;
+    if (red) return std::nullopt;
+    red = r;
+  }
+  return red;
+}
+
+// A grey image with noise (sigma 2), a poster of `poster_bgr` and a disc of kRed overlapping it.
+cv::Mat ballOnPoster(const cv::Vec3b& poster_bgr, const cv::Point2d& centre, double radius_px) {
+  cv::Mat img(240, 320, CV_8UC3, cv::Scalar(120, 125, 130));
+  cv::rectangle(img, cv::Rect(150, 60, 140, 120), cv::Scalar(poster_bgr), cv::FILLED);
+  // Drawn at 1/16 px so that its centre is exact.
+  cv::circle(img, cv::Point(cvRound(centre.x * 16), cvRound(centre.y * 16)),
+             cvRound(radius_px * 16), cv::Scalar(kRed), cv::FILLED, cv::LINE_AA, 4);
+  cv::Mat noise(img.size(), CV_16SC3);
+  cv::RNG rng(5);
+  rng.fill(noise, cv::RNG::NORMAL, 0, 2);
+  cv::Mat out;
+  img.convertTo(out, CV_16SC3);
+  out += noise;
+  out.convertTo(img, CV_8UC3);
+  return img;
+}
+
+}  // namespace
+
+TEST(ColorModel, HueWindowArithmetic) {
+  EXPECT_DOUBLE_EQ(perception::hueWindowCentreDeg(340, 20), 0);
+  EXPECT_DOUBLE_EQ(perception::hueWindowHalfwidthDeg(340, 20), 20);
+  EXPECT_DOUBLE_EQ(perception::hueWindowCentreDeg(90, 150), 120);
+  EXPECT_DOUBLE_EQ(perception::hueDifferenceDeg(350, 10), -20);
+  EXPECT_DOUBLE_EQ(perception::hueDifferenceDeg(10, 350), 20);
+  EXPECT_DOUBLE_EQ(perception::hueDifferenceDeg(180, 0), 180);
+}
+
+// A dimmed ball's shaded side falls below intensity_min: its region shrinks to the lit side and
+// its centroid moves toward the light. Relative to its own bright pixels, the region is whole.
+TEST(ColorModel, ARelativeIntensityLimitKeepsADimmedBallWhole) {
+  const StereoRig rig = StereoRig::makeDefault();
+  const Eigen::Vector3d p(0.2, 0.1, 2.5);
+  const Eigen::Vector2d truth = rig.view(Side::kLeft, PtzPose{}).project(p);
+  perception::DetectorParams fixed_limit = defaultClasses();
+  fixed_limit.adapt.intensity_min_fraction = 0;
+  perception::DetectorParams relative = fixed_limit;
+  relative.adapt.intensity_min_fraction = 0.25;
+  const perception::Detector fixed_detector(fixed_limit), relative_detector(relative);
+
+  const sim::SimFrame lit = renderLit(rig, p, 1.0);
+  const std::optional<perception::Region> lit_region = onlyRed(fixed_detector.detect(lit.left));
+  ASSERT_TRUE(lit_region);
+  // In full light the relative limit is intensity_min itself: the same region to the bit.
+  const std::optional<perception::Region> lit_relative =
+      onlyRed(relative_detector.detect(lit.left));
+  ASSERT_TRUE(lit_relative);
+  EXPECT_EQ(lit_relative->area_px2, lit_region->area_px2);
+  EXPECT_EQ(lit_relative->centroid_px, lit_region->centroid_px);
+
+  const sim::SimFrame dim = renderLit(rig, p, 0.3);
+  const std::optional<perception::Region> dim_fixed = onlyRed(fixed_detector.detect(dim.left));
+  const std::optional<perception::Region> dim_relative =
+      onlyRed(relative_detector.detect(dim.left));
+  ASSERT_TRUE(dim_relative);
+  const double fixed_error = dim_fixed ? std::hypot(dim_fixed->centroid_px.x - truth.x(),
+                                                    dim_fixed->centroid_px.y - truth.y())
+                                       : 1e9;
+  const double relative_error =
+      std::hypot(dim_relative->centroid_px.x - truth.x(), dim_relative->centroid_px.y - truth.y());
+  EXPECT_GT(fixed_error, 2.0) << "dimmed to 30 % the fixed limit should cut the shaded side";
+  EXPECT_LT(relative_error, 1.0);
+  EXPECT_GT(dim_relative->area_px2, 0.9 * lit_region->area_px2);
+  EXPECT_LT(dim_relative->area_px2, 1.1 * lit_region->area_px2);
+  // The colour measured: hue near the red window's centre, intensity about 30 % of the lit one.
+  EXPECT_NEAR(dim_relative->colour.intensity / lit_region->colour.intensity, 0.3, 0.05);
+  EXPECT_NEAR(dim_relative->colour.hue_offset_deg, 0, 2);
+}
+
+TEST(ColorModel, TheRegionsColourIsMeasured) {
+  perception::DetectorParams params = defaultClasses();
+  const perception::Detector detector(params);
+  cv::Mat img(120, 160, CV_8UC3, cv::Scalar(120, 125, 130));
+  cv::circle(img, {80, 60}, 20, cv::Scalar(kRed), cv::FILLED, cv::LINE_8);
+  const std::optional<perception::Region> r = onlyRed(detector.detect(img));
+  ASSERT_TRUE(r);
+  // BGR (30, 30, 210): hue 0 (the window 340..20's centre), saturation 1 - 3 * 30 / 270.
+  EXPECT_EQ(r->colour.pixels, static_cast<int>(r->area_px2));
+  EXPECT_NEAR(r->colour.hue_offset_deg, 0, 1e-9);
+  EXPECT_NEAR(r->colour.hue_sigma_deg, 0, 1e-9);
+  EXPECT_NEAR(r->colour.saturation, 1 - 90.0 / 270, 1e-9);
+  EXPECT_NEAR(r->colour.intensity, 90, 1e-9);
+}
+
+// A red ball in front of a red-orange poster (hue 15.6 deg, inside the red window): one blob, not
+// a ball. Gated to the ball's hue, the ball alone.
+TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
+  const cv::Vec3b poster(30, 80, 210);
+  const cv::Point2d centre(170.3, 120.6);
+  const double radius = 18;
+  const cv::Mat img = ballOnPoster(poster, centre, radius);
+  perception::DetectorParams params = defaultClasses();
+  params.classes[0].max_area_px2 = 1e6;
+  const perception::Detector plain(params);
+  bool ball_found = false;
+  for (const auto& r : plain.detect(img)) {
+    if (r.class_index == 0 &&
+        std::hypot(r.centroid_px.x - centre.x, r.centroid_px.y - centre.y) < 0.5) {
+      ball_found = true;
+    }
+  }
+  EXPECT_FALSE(ball_found) << "without a gate the ball should merge with the poster";
+
+  // The model learns the ball's hue from regions of it alone (its confirmed track's).
+  const cv::Mat alone = ballOnPoster(cv::Vec3b(120, 125, 130), centre, radius);
+  const std::optional<perception::Region> learned_from = onlyRed(plain.detect(alone));
+  ASSERT_TRUE(learned_from);
+  params.adapt.follow = true;
+  perception::ColorModel model;
+  for (int i = 0; i < params.adapt.follow_min_updates; ++i) {
+    EXPECT_FALSE(model.gate(i * 0.1, params.adapt).active);
+    model.learn(learned_from->colour, i * 0.1, params.adapt);
+  }
+  const double t = params.adapt.follow_min_updates * 0.1;
+  const perception::HueGate gate = model.gate(t, params.adapt);
+  ASSERT_TRUE(gate.active);
+  EXPECT_NEAR(gate.offset_deg, 0, 1);
+  EXPECT_LT(gate.halfwidth_deg, 10);
+
+  perception::Detector gated(params);
+  gated.setGates({gate});
+  const std::optional<perception::Region> ball = onlyRed(gated.detect(img));
+  ASSERT_TRUE(ball);
+  EXPECT_NEAR(ball->centroid_px.x, centre.x, 0.3);
+  EXPECT_NEAR(ball->centroid_px.y, centre.y, 0.3);
+  // The disc, and its rim's pixels blended less than about half with the poster.
+  EXPECT_GT(ball->area_px2, M_PI * (radius - 0.5) * (radius - 0.5));
+  EXPECT_LT(ball->area_px2, M_PI * (radius + 0.75) * (radius + 0.75));
+  // Forgotten after follow_forget_s without a confirmed region: the class's window again.
+  EXPECT_FALSE(model.gate(t + params.adapt.follow_forget_s + 0.01, params.adapt).active);
+}
+
+TEST(ColorModel, LearnsAtItsRateAndForgets) {
+  perception::ColorAdaptParams p;
+  p.follow = true;
+  p.follow_learning_rate = 0.25;
+  p.follow_min_updates = 1;
+  perception::ColorModel model;
+  perception::RegionColour c;
+  c.pixels = 100;
+  c.hue_offset_deg = 4;
+  c.hue_sigma_deg = 1;
+  model.learn(c, 0.0, p);
+  EXPECT_DOUBLE_EQ(model.hueOffsetDeg(), 4);
+  c.hue_offset_deg = 8;
+  model.learn(c, 0.1, p);
+  EXPECT_DOUBLE_EQ(model.hueOffsetDeg(), 5);  // 4 + 0.25 (8 - 4)
+  // The spread's three sigmas, but never below the floor.
+  EXPECT_DOUBLE_EQ(model.gate(0.1, p).halfwidth_deg, p.follow_min_halfwidth_deg);
+  c.hue_sigma_deg = 5;
+  model.learn(c, 0.2, p);
+  EXPECT_DOUBLE_EQ(model.gate(0.2, p).halfwidth_deg, 3 * (1 + 0.25 * 4));
+  // A region without pixels (a split disc) teaches nothing.
+  model.learn(perception::RegionColour{}, 0.3, p);
+  EXPECT_EQ(model.updates(), 3);
+  // Back after a gap longer than follow_forget_s: a new object, learned afresh.
+  c.hue_offset_deg = -6;
+  model.learn(c, 0.2 + p.follow_forget_s + 0.1, p);
+  EXPECT_DOUBLE_EQ(model.hueOffsetDeg(), -6);
+  EXPECT_EQ(model.updates(), 1);
+}
+
+TEST(ColorModel, SaysWhenTheAppearanceLeavesTheConfiguredRange) {
+  const perception::ColorClass red = defaultClasses().classes[0];  // 340..20, saturation >= 0.5
+  perception::ColorAdaptParams p;
+  p.intensity_min_fraction = 0;
+  perception::ColorModel model;
+  EXPECT_EQ(model.outOfRange(red, p), "");
+  perception::RegionColour c;
+  c.pixels = 100;
+  c.hue_offset_deg = 5;
+  c.hue_sigma_deg = 2;
+  c.saturation = 0.7;
+  c.saturation_sigma = 0.03;
+  c.intensity = 90;
+  model.learn(c, 0, p);
+  EXPECT_EQ(model.outOfRange(red, p), "");
+  c.hue_offset_deg = 17;  // 17 + 2 * 2 > 20
+  model.learn(c, 0.1, p);
+  EXPECT_NE(model.outOfRange(red, p).find("hue 17.0 +- 4.0 deg"), std::string::npos)
+      << model.outOfRange(red, p);
+  c.hue_offset_deg = 0;
+  c.saturation = 0.55;  // 0.55 - 2 * 0.03 < 0.5
+  model.learn(c, 0.2, p);
+  EXPECT_NE(model.outOfRange(red, p).find("saturation 0.55"), std::string::npos);
+  c.saturation = 0.7;
+  c.intensity = 20;  // below 1.5 intensity_min (15)
+  model.learn(c, 0.3, p);
+  EXPECT_NE(model.outOfRange(red, p).find("intensity 20"), std::string::npos);
+  // Relative intensity reaches down to floor / fraction: 20 is then well inside.
+  p.intensity_min_fraction = 0.25;
+  p.intensity_floor = 2;
+  EXPECT_EQ(model.outOfRange(red, p), "");
+}
