@@ -26,7 +26,8 @@ void declareDetectParams(Params& p) {
         "narrowed to it (inside its configured window), so clutter of a near hue does not merge "
         "with it");
   p.add("color_follow_sigmas", a.follow_sigmas, "",
-        "colour follow: the hue kept, in sigmas of the target's hue spread", Range::above(0));
+        "colour follow: the hue kept, in sigmas of the target's hue spread",
+        Range::between(0.1, 20));
   p.add("color_follow_min_halfwidth_deg", a.follow_min_halfwidth_deg, "deg",
         "colour follow: the hue kept is never narrower than this either side",
         Range::between(0, 180));

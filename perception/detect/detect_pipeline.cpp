@@ -119,11 +119,12 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
     pending_click_.reset();
     clicked_.stop();
     recent_views_.clear();
+    for (ColorModel& model : color_models_) model.reset();
   }
   last_t_s_ = t_s;
   const auto t0 = std::chrono::steady_clock::now();
   // Windows around the tracks' predicted images, or the whole frames; decoding only what is
-  // scanned. Left and right on two cores (Detector is const and shares nothing mutable).
+  // scanned. Left and right on two cores (the detector's gates are set before, read only there).
   ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
   if (config_.detector.adapt.follow) {
     std::vector<HueGate> gates;
@@ -187,7 +188,7 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   tracker_.update(t_s, measurements);
   tracker_.updateFromViews(t_s, one_view, lv, rv);
   const int64_t target_id = chooseTarget(t_s, &out->target_reason_changed);
-  learnColour(t_s, target_id, objects, lr, rr);
+  learnColour(t_s, target_id, measurements, objects, lr, rr);
   recent_views_.push_back({m.seq, {lv, rv}});
   if (recent_views_.size() > kViewsKept) recent_views_.pop_front();
   processing_ms_.push_back(
@@ -357,32 +358,49 @@ void DetectPipeline::setTrackAndScanCounters() {
 }
 
 void DetectPipeline::learnColour(double t_s, int64_t target_id,
+                                 const std::vector<TrackMeasurement>& measurements,
                                  const std::vector<StereoObject>& objects,
                                  const std::vector<Region>& lr, const std::vector<Region>& rr) {
-  appearance_warning_.clear();
+  const ColorAdaptParams& adapt = config_.detector.adapt;
+  // Another target is another object: what was learned of the last one is not its colour.
+  if (target_id != colour_target_id_) {
+    for (ColorModel& model : color_models_) model.reset();
+    colour_target_id_ = target_id;
+  }
   const Track* target = tracker_.find(target_id);
-  if (target == nullptr || target->object_index < 0 ||
-      static_cast<size_t>(target->object_index) >= objects.size()) {
-    return;
+  if (target != nullptr && target->object_index >= 0 &&
+      static_cast<size_t>(target->object_index) < objects.size()) {
+    const StereoObject& o = objects[static_cast<size_t>(target->object_index)];
+    // Only a trusted centre's regions: one touching the border or another object may hold
+    // pixels of something else.
+    bool trusted = false;
+    for (const TrackMeasurement& tm : measurements) {
+      if (tm.object_index == target->object_index) trusted = tm.untrusted.empty();
+    }
+    const auto k = static_cast<size_t>(o.class_index);
+    if (trusted && k < color_models_.size()) {
+      // Both views' whole regions as one measurement a frame (a split disc or a region cut by
+      // its window is not measured).
+      color_models_[k].learn(mergeColours(lr[static_cast<size_t>(o.left)].colour,
+                                          rr[static_cast<size_t>(o.right)].colour),
+                             t_s, adapt);
+    }
   }
-  const StereoObject& o = objects[static_cast<size_t>(target->object_index)];
-  const auto k = static_cast<size_t>(o.class_index);
-  if (k >= color_models_.size()) return;
-  ColorModel& model = color_models_[k];
-  // Whole regions only (a split disc or a region cut by its window is not measured).
-  for (const Region* r : {&lr[static_cast<size_t>(o.left)], &rr[static_cast<size_t>(o.right)]}) {
-    model.learn(r->colour, t_s, config_.detector.adapt);
+  // Every class's model as it now stands; the warning lasts while its model is recent.
+  appearance_warning_.clear();
+  for (size_t k = 0; k < color_models_.size(); ++k) {
+    const ColorModel& model = color_models_[k];
+    const ColorClass& c = config_.detector.classes[k];
+    const HueGate gate = model.gate(t_s, adapt);
+    counters_["color_" + c.name + "_hue_offset_cdeg"] = std::lround(model.hueOffsetDeg() * 100);
+    counters_["color_" + c.name + "_gate_halfwidth_cdeg"] =
+        gate.active ? std::lround(std::min(gate.halfwidth_deg, 180.0) * 100) : 0;
+    if (!model.recent(t_s, adapt)) continue;
+    const std::string out = model.outOfRange(c, adapt);
+    if (!out.empty() && appearance_warning_.empty())
+      appearance_warning_ = "class " + c.name + ": " + out;
   }
-  const ColorClass& c = config_.detector.classes[k];
-  const HueGate gate = model.gate(t_s, config_.detector.adapt);
-  counters_["color_" + c.name + "_hue_offset_cdeg"] = std::lround(model.hueOffsetDeg() * 100);
-  counters_["color_" + c.name + "_gate_halfwidth_cdeg"] =
-      gate.active ? std::lround(gate.halfwidth_deg * 100) : 0;
-  const std::string out = model.outOfRange(c, config_.detector.adapt);
-  if (!out.empty()) {
-    appearance_warning_ = "class " + c.name + ": " + out;
-    ++counters_["appearance_out_of_range_frames"];
-  }
+  if (!appearance_warning_.empty()) ++counters_["appearance_out_of_range_frames"];
 }
 
 void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {

@@ -77,7 +77,8 @@ class DetectPipeline {
   // counts), orientations_estimated, _failed, _skipped, orientation_views_decoded, and every 30
   // frames (boxes) processing_us_p50/_p99 (orientation_us_p50/_p99); discover()'s late_known,
   // late_updates, late_starts, late_dropped, discoveries_failed and every 30
-  // discovery_us_p50/_p99.
+  // discovery_us_p50/_p99; the target's colour class's color_<class>_hue_offset_cdeg,
+  // color_<class>_gate_halfwidth_cdeg and appearance_out_of_range_frames.
   const std::map<std::string, int64_t>& counters() const { return counters_; }
   // Where the target's colour class's appearance, as last seen, leaves its configured range
   // (ColorModel::outOfRange, with the class's name); "" when it does not, or no colour target.
@@ -111,8 +112,9 @@ class DetectPipeline {
   void setCounters(int64_t target_id, int64_t target_index);
   // The target's colour class learns the colour of its regions in this frame (color_follow, or
   // for the appearance status); counters color_* and appearance_out_of_range_frames.
-  void learnColour(double t_s, int64_t target_id, const std::vector<StereoObject>& objects,
-                   const std::vector<Region>& lr, const std::vector<Region>& rr);
+  void learnColour(double t_s, int64_t target_id, const std::vector<TrackMeasurement>& measurements,
+                   const std::vector<StereoObject>& objects, const std::vector<Region>& lr,
+                   const std::vector<Region>& rr);
   // The tracker's counts, the scanners' and their errors into counters_.
   void setTrackAndScanCounters();
 
@@ -140,6 +142,7 @@ class DetectPipeline {
   std::vector<double> orientation_us_;
   std::map<std::string, int64_t> counters_;
   std::vector<ColorModel> color_models_;  // by colour class index
+  int64_t colour_target_id_ = -1;         // the target they learned from
   std::string appearance_warning_;
 };
 

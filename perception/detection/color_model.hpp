@@ -49,15 +49,23 @@ struct RegionColour {
 
 struct ColorClass;
 
+// Two regions' colours (a stereo pair's) as one, weighted by their pixels.
+RegionColour mergeColours(const RegionColour& a, const RegionColour& b);
+
 // One class's model of its tracked object's colour.
 class ColorModel {
  public:
-  // A confirmed region of the tracked object at t_s.
+  // A confirmed region of the tracked object at t_s (once a frame).
   void learn(const RegionColour& c, double t_s, const ColorAdaptParams& p);
   HueGate gate(double t_s, const ColorAdaptParams& p) const;
-  // Where the object's colour (its mean and two sigmas, as last learned) leaves the class's
-  // configured limits: "" when inside; else e.g. "hue 17.5 +- 2.1 deg reaches 20 (window 340 ..
-  // 20)". intensity_min is judged as detection does (relative when intensity_min_fraction).
+  // Learned from within follow_forget_s before t_s (a time before the last: a new run, not).
+  bool recent(double t_s, const ColorAdaptParams& p) const;
+  void reset() { *this = ColorModel(); }
+  // Where the object's colour as last measured leaves the class's configured limits: its hue band
+  // as the gate takes it (mean +- max(follow_sigmas sigma, follow_min_halfwidth_deg)), its
+  // saturation's mean +- 2 sigma, its mean intensity. "" when inside; else e.g. "hue 17.5 +- 4.2
+  // deg reaches the window 340 .. 20". intensity_min is judged as detection does (relative when
+  // intensity_min_fraction).
   std::string outOfRange(const ColorClass& c, const ColorAdaptParams& p) const;
   int updates() const { return updates_; }
   double hueOffsetDeg() const { return hue_offset_deg_; }

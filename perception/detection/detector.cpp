@@ -290,8 +290,10 @@ void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
       if (total >= kMinPixels) {
         int below = 0, s = 0;
         while (s < kSums - 1 && below + h[s] < 0.95 * total) below += h[s++];
-        limit = std::clamp(params_.adapt.intensity_min_fraction * intensityOf(s),
-                           params_.adapt.intensity_floor, c.intensity_min);
+        // Never above intensity_min, even when the floor is (a class may set intensity_min 0).
+        limit = std::min(std::max(params_.adapt.intensity_min_fraction * intensityOf(s),
+                                  params_.adapt.intensity_floor),
+                         c.intensity_min);
       }
       min_sum[k] = 3 * limit;
     }
@@ -380,6 +382,7 @@ cv::Mat Detector::mask(const cv::Mat& bgr, size_t index) const {
   cv::Mat labels;
   cv::Rect roi;
   label(bgr, &labels);
+  adaptLabels(bgr, &labels);
   return maskFromLabels(labels, index, &roi);
 }
 
@@ -483,7 +486,10 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
         }
         if (!shape_ok) continue;
       }
-      r.colour = measureColour(filtered(bbox), alone & m(bbox), ci);
+      // Its pixels of the class's colour (not those the closing filled in).
+      cv::Mat coloured;
+      cv::bitwise_and(labels(bbox), cv::Scalar(1 << ci), coloured);
+      r.colour = measureColour(filtered(bbox), (alone & m(bbox)) & (coloured > 0), ci);
       regions.push_back(r);
     }
     std::sort(regions.begin() + static_cast<ptrdiff_t>(first), regions.end(),

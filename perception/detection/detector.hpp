@@ -38,7 +38,7 @@ struct DetectorParams {
   int filter_size_px = 3;                   // median filter (the paper's 3x3 mask)
   int morph_size_px = 3;                    // opening then closing
   std::vector<ColorClass> classes;
-  ColorAdaptParams adapt;  // relative intensity, the hue model (off by default)
+  ColorAdaptParams adapt;  // relative intensity, the hue model
 
   // Reads the config section `classes` (a list of maps with the fields of ColorClass).
   static DetectorParams fromConfig(const cv::FileNode& classes, const std::string& where);

@@ -4,6 +4,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <filesystem>
 
 #include "common/config.hpp"
@@ -45,13 +46,22 @@ cv::Mat readImage(const std::string& value, const std::string& base_dir, const s
   cv::Mat image;
   std::string why = "cannot be read as an image";
   std::error_code ec;
+  // A photograph is at most this big, on disk and decoded (a config may name any file).
+  constexpr uintmax_t kMaxFileBytes = uintmax_t{64} << 20;
+  constexpr double kMaxPixels = 40e6;
   if (!std::filesystem::is_regular_file(path, ec)) {  // (imread would only warn on stderr)
     why = std::filesystem::exists(path, ec) ? "is not a file" : "does not exist";
+  } else if (std::filesystem::file_size(path, ec) > kMaxFileBytes) {
+    why = "is larger than 64 MiB";
   } else {
     try {
       image = cv::imread(path.string(), cv::IMREAD_COLOR);
     } catch (const cv::Exception& e) {
       why += " (" + e.err + ")";
+    }
+    if (static_cast<double>(image.total()) > kMaxPixels) {
+      image.release();
+      why = "has more than 40 million pixels";
     }
     if (!image.empty()) return image;
   }

@@ -153,6 +153,28 @@ TEST_F(Pipeline, TheTargetsPoseIsTheRedBallWithinHalfAPercentOfRange) {
   EXPECT_TRUE(box->has_yaw);
 }
 
+// The target's colour as the status tells it: the learned hue off the red window's centre, the
+// gate once learned, and a WARN when the object's hue reaches the window's edge.
+TEST_F(Pipeline, TheTargetsHueIsLearnedAndItsEdgeOfRangeSaid) {
+  perception::DetectPipeline red = make();
+  for (int i = 0; i < 8; ++i) feed(&red);
+  EXPECT_EQ(red.appearanceWarning(), "");
+  EXPECT_EQ(counter(red, "appearance_out_of_range_frames"), 0);
+  EXPECT_NEAR(counter(red, "color_red_ball_hue_offset_cdeg"), 0, 100);  // BGR (30, 30, 210): 0 deg
+  EXPECT_GE(counter(red, "color_red_ball_gate_halfwidth_cdeg"), 400);   // active, >= 4 deg
+
+  // BGR (30, 85, 210): hue 17.4 deg, inside 340..20, but its band (+- 4 deg at least) is not.
+  sim::Scene scene;
+  scene.objects = {object("red_ball", sim::SceneObject::Shape::kSphere, kRedAt, {30, 85, 210})};
+  frame_ = render(scene);
+  perception::DetectPipeline orange = make();
+  for (int i = 0; i < 8; ++i) feed(&orange);
+  EXPECT_NEAR(counter(orange, "color_red_ball_hue_offset_cdeg"), 1740, 100);
+  EXPECT_NE(orange.appearanceWarning().find("class red_ball: hue 17"), std::string::npos)
+      << orange.appearanceWarning();
+  EXPECT_GT(counter(orange, "appearance_out_of_range_frames"), 0);
+}
+
 TEST_F(Pipeline, TheSameFramesGiveTheSameMessagesWithAndWithoutWindows) {
   perception::DetectPipeline windowed = make(), whole = make({{"windows", "false"}});
   for (int i = 0; i < 8; ++i) {

@@ -203,9 +203,40 @@ TEST(ColorModel, LearnsAtItsRateAndForgets) {
   EXPECT_EQ(model.updates(), 3);
   // Back after a gap longer than follow_forget_s: a new object, learned afresh.
   c.hue_offset_deg = -6;
-  model.learn(c, 0.2 + p.follow_forget_s + 0.1, p);
+  const double back_s = 0.2 + p.follow_forget_s + 0.1;
+  model.learn(c, back_s, p);
   EXPECT_DOUBLE_EQ(model.hueOffsetDeg(), -6);
   EXPECT_EQ(model.updates(), 1);
+  EXPECT_TRUE(model.gate(back_s, p).active);
+  // Time going back is a new run of the source: nothing of the old one holds.
+  EXPECT_FALSE(model.recent(back_s - 1, p));
+  EXPECT_FALSE(model.gate(back_s - 1, p).active);
+  c.hue_offset_deg = 3;
+  model.learn(c, back_s - 1, p);
+  EXPECT_DOUBLE_EQ(model.hueOffsetDeg(), 3);
+  EXPECT_EQ(model.updates(), 1);
+}
+
+TEST(ColorModel, TwoViewsColoursMergeWeightedByTheirPixels) {
+  perception::RegionColour a, b;
+  a.pixels = 300;
+  a.hue_offset_deg = 2;
+  a.hue_sigma_deg = 1;
+  a.saturation = 0.6;
+  a.intensity = 90;
+  b.pixels = 100;
+  b.hue_offset_deg = 6;
+  b.hue_sigma_deg = 1;
+  b.saturation = 0.7;
+  b.intensity = 70;
+  const perception::RegionColour m = perception::mergeColours(a, b);
+  EXPECT_EQ(m.pixels, 400);
+  EXPECT_DOUBLE_EQ(m.hue_offset_deg, 3);  // 0.75 * 2 + 0.25 * 6
+  // Pooled variance: 0.75 (1 + 1^2) + 0.25 (1 + 3^2) = 4.
+  EXPECT_NEAR(m.hue_sigma_deg, 2, 1e-12);
+  EXPECT_NEAR(m.saturation, 0.625, 1e-12);
+  EXPECT_NEAR(m.intensity, 85, 1e-12);
+  EXPECT_EQ(perception::mergeColours(a, perception::RegionColour{}).pixels, 300);
 }
 
 TEST(ColorModel, SaysWhenTheAppearanceLeavesTheConfiguredRange) {
@@ -223,9 +254,9 @@ TEST(ColorModel, SaysWhenTheAppearanceLeavesTheConfiguredRange) {
   c.intensity = 90;
   model.learn(c, 0, p);
   EXPECT_EQ(model.outOfRange(red, p), "");
-  c.hue_offset_deg = 17;  // 17 + 2 * 2 > 20
+  c.hue_offset_deg = 15;  // 15 + max(3 * 2, 4) > 20
   model.learn(c, 0.1, p);
-  EXPECT_NE(model.outOfRange(red, p).find("hue 17.0 +- 4.0 deg"), std::string::npos)
+  EXPECT_NE(model.outOfRange(red, p).find("hue 15.0 +- 6.0 deg"), std::string::npos)
       << model.outOfRange(red, p);
   c.hue_offset_deg = 0;
   c.saturation = 0.55;  // 0.55 - 2 * 0.03 < 0.5
