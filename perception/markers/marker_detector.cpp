@@ -179,7 +179,12 @@ std::vector<MarkerSighting> MarkerDetector::detect(const cv::Mat& image, const c
   const bool any_aruco = std::any_of(arucos_.begin(), arucos_.end(),
                                      [&](const auto& a) { return wanted(a->family, "aruco"); });
   if (aruco_scale > 1 && any_aruco) {
-    cv::resize(grey, aruco_grey, cv::Size(), 1 / aruco_scale, 1 / aruco_scale, cv::INTER_AREA);
+    // A part too small for a tag once reduced is not read (nor reduced to nothing: resize throws).
+    if (cvRound(grey.cols / aruco_scale) < 8 || cvRound(grey.rows / aruco_scale) < 8) {
+      aruco_grey = cv::Mat();
+    } else {
+      cv::resize(grey, aruco_grey, cv::Size(), 1 / aruco_scale, 1 / aruco_scale, cv::INTER_AREA);
+    }
   }
   for (const auto& a : arucos_) {
     if (aruco_grey.cols < 8 || aruco_grey.rows < 8) break;  // no tag of min_edge_px fits
