@@ -29,6 +29,20 @@ ViscaModel ViscaModel::load(const std::string& path) {
   m.pan_max_rad = range.pan_max_rad;
   m.tilt_min_rad = range.tilt_min_rad;
   m.tilt_max_rad = range.tilt_max_rad;
+  // Every position within the limits is spoken in the command's signed nibbles: pan's 4 or 5,
+  // tilt's 4.
+  const auto fits = [&](double rad, double units_per_rad, int nibbles, const char* field) {
+    const double units = std::round(rad * units_per_rad), limit = std::ldexp(1.0, 4 * nibbles - 1);
+    if (!(units >= -limit && units < limit)) {
+      throw ConfigError(fieldPath(where, field) + ": " + std::to_string(rad / deg) + " deg is " +
+                        std::to_string(units) + " units, beyond the " + std::to_string(nibbles) +
+                        " nibbles of a VISCA position");
+    }
+  };
+  fits(m.pan_min_rad, m.pan_units_per_rad, m.pan_nibbles, "pan_min_deg");
+  fits(m.pan_max_rad, m.pan_units_per_rad, m.pan_nibbles, "pan_max_deg");
+  fits(m.tilt_min_rad, m.tilt_units_per_rad, 4, "tilt_min_deg");
+  fits(m.tilt_max_rad, m.tilt_units_per_rad, 4, "tilt_max_deg");
   // VISCA speeds are one byte, 1 up to the model's maximum.
   m.pan_speed_max = readInt(root, "pan_speed_max", where, Range::between(1, 127));
   m.tilt_speed_max = readInt(root, "tilt_speed_max", where, Range::between(1, 127));

@@ -197,6 +197,9 @@ TEST(ViscaCamera, ABadModelFileIsRefusedNamingTheFieldAndTheValue) {
        "zoom_positions[1]: must be a number, got 'far'"},
       {"zoom_ratios:    [1, 2, 3", "zoom_ratios:    [2, 3",
        "zoom_ratios: must have as many entries as zoom_positions (16), got 15"},
+      // fuzz_visca_model's find: a tilt of 4 nibbles cannot say -102040.
+      {"tilt_units_per_deg: 51.2", "tilt_units_per_deg: 5102",
+       "tilt_min_deg: -20.000000 deg is -102040.000000 units, beyond the 4 nibbles"},
   };
   for (const auto& c : cases) {
     std::string text = good;
