@@ -266,7 +266,8 @@ void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
   // The relative limits: each class's bright level, the 95th percentile of its pixels' sums.
   std::array<double, DetectorParams::kMaxClasses> min_sum{};
   if (relative_bits_ != 0) {
-    std::vector<int> histogram(n * kSums, 0);
+    // On the stack: a scan's parts are many a frame.
+    std::array<std::array<int, kSums>, DetectorParams::kMaxClasses> histogram{};
     for (int y = 0; y < bgr.rows; ++y) {
       const uchar* in = bgr.ptr<uchar>(y);
       const uchar* l = labels->ptr<uchar>(y);
@@ -275,7 +276,7 @@ void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
         if (bits == 0) continue;
         const int sum = in[3 * x] + in[3 * x + 1] + in[3 * x + 2];
         for (size_t k = 0; k < n; ++k) {
-          if (bits & (1u << k)) ++histogram[k * kSums + static_cast<size_t>(sum)];
+          if (bits & (1u << k)) ++histogram[k][static_cast<size_t>(sum)];
         }
       }
     }
@@ -283,7 +284,7 @@ void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
     for (size_t k = 0; k < n; ++k) {
       if (!(relative_bits_ & (1u << k))) continue;
       const ColorClass& c = params_.classes[k];
-      const int* h = &histogram[k * kSums];
+      const int* h = histogram[k].data();
       int total = 0;
       for (int s = 0; s < kSums; ++s) total += h[s];
       double limit = c.intensity_min;

@@ -140,6 +140,13 @@ void Light::apply(double t_s, cv::Mat* bgr) const {
   }
 }
 
+double FirstOrderLag::step(double t_s, double time_constant_s) {
+  const double dt_s = started_ ? std::max(0.0, t_s - last_t_s_) : 0;
+  last_t_s_ = t_s;
+  started_ = true;
+  return 1 - std::exp(-dt_s / time_constant_s);
+}
+
 void AutoExposure::apply(const Light& light, double t_s, cv::Mat* bgr) {
   if (light.auto_exposure_target <= 0) return;
   if (gain_ != 1) bgr->convertTo(*bgr, CV_8U, gain_);
@@ -147,10 +154,7 @@ void AutoExposure::apply(const Light& light, double t_s, cv::Mat* bgr) {
   const double grey = std::max(1.0, (mean[0] + mean[1] + mean[2]) / 3);
   const double wanted = std::clamp(gain_ * light.auto_exposure_target / grey,
                                    1 / light.auto_exposure_max_gain, light.auto_exposure_max_gain);
-  const double dt_s = started_ ? std::max(0.0, t_s - last_t_s_) : 0;
-  gain_ += (1 - std::exp(-dt_s / light.auto_exposure_time_constant_s)) * (wanted - gain_);
-  last_t_s_ = t_s;
-  started_ = true;
+  gain_ += lag_.step(t_s, light.auto_exposure_time_constant_s) * (wanted - gain_);
 }
 
 void AutoWhiteBalance::apply(const Light& light, double t_s, cv::Mat* bgr) {
@@ -162,12 +166,9 @@ void AutoWhiteBalance::apply(const Light& light, double t_s, cv::Mat* bgr) {
   const double green = std::max(1.0, mean[1]);
   const double wanted_b = std::clamp(gain_b_ * green / std::max(1.0, mean[0]), kMinGain, kMaxGain);
   const double wanted_r = std::clamp(gain_r_ * green / std::max(1.0, mean[2]), kMinGain, kMaxGain);
-  const double dt_s = started_ ? std::max(0.0, t_s - last_t_s_) : 0;
-  const double step = 1 - std::exp(-dt_s / tau_s);
+  const double step = lag_.step(t_s, tau_s);
   gain_b_ += step * (wanted_b - gain_b_);
   gain_r_ += step * (wanted_r - gain_r_);
-  last_t_s_ = t_s;
-  started_ = true;
 }
 
 Light Light::fromConfig(const cv::FileNode& node, const std::string& where) {

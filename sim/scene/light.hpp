@@ -63,6 +63,17 @@ struct Light {
 // One camera's auto-exposure: a gain on its image that brings the image's mean grey to
 // auto_exposure_target, following it with a first-order lag, so that the image brightens or
 // darkens a while after the light or the view changed, as a real camera's does.
+// A camera's first-order lag: the share of the way to its target a quantity moves between the
+// frame before and t_s (0 at the first frame, and when time goes back).
+class FirstOrderLag {
+ public:
+  double step(double t_s, double time_constant_s);
+
+ private:
+  double last_t_s_ = 0;
+  bool started_ = false;
+};
+
 class AutoExposure {
  public:
   // bgr at the gain the earlier frames set; the gain then moves toward what this frame asks for.
@@ -72,8 +83,7 @@ class AutoExposure {
 
  private:
   double gain_ = 1;
-  double last_t_s_ = 0;
-  bool started_ = false;
+  FirstOrderLag lag_;
 };
 
 // One camera's auto white balance, grey world: gains on blue and red that bring the image's mean
@@ -90,8 +100,7 @@ class AutoWhiteBalance {
 
  private:
   double gain_b_ = 1, gain_r_ = 1;
-  double last_t_s_ = 0;
-  bool started_ = false;
+  FirstOrderLag lag_;
 };
 
 }  // namespace ptz::sim
