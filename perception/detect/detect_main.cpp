@@ -5,6 +5,8 @@
 // it is gone (TARGET_SELECT changes it); OBJECT_POSE's target_index is that track's object when a
 // trusted measurement updated it in this frame. The work on a frame is DetectPipeline's
 // (detect_pipeline.hpp); here: flags and config, LCM in and out, the status.
+#include <opencv2/core/utility.hpp>
+
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -70,6 +72,10 @@ class DetectNode {
                        appearance);
     }
     if (!appearance.empty()) log_.warn("appearance", "ptz-detect: " + appearance);
+    if (!out.new_objects_note.empty()) {
+      log_.warn("discover",
+                "ptz-detect: the search for new objects failed: " + out.new_objects_note);
+    }
     if (!out.click_note.empty()) {
       std::fprintf(stderr, "ptz-detect: click: %s\n", out.click_note.c_str());
     }
@@ -83,12 +89,22 @@ class DetectNode {
     if (!publishWhileFresh(m, ch_tracks_, &out.tracks)) return;
     if (!publishWhileFresh(m, ch_pose_, &out.pose)) return;
     publishWhileFresh(m, ch_detections_, &out.detections);
-    // New tags, faces and people: once the frame's messages are out, off their latency.
-    if (!pipeline_.discover(m, &why)) {
-      log_.warn("discover", "ptz-detect: frame " + std::to_string(m.seq) +
-                                ": the search for new objects failed: " + why);
+    // New tags, faces and people: once the frame's messages are out, off their latency; beside
+    // the next frames, unless the frames are to be repeatable (not on the wall clock: sim time).
+    if (!pipeline_.discover(m, !captureOnWallClock(m.utime, received), &why)) {
+      log_.warn("discover", "ptz-detect: the search for new objects failed: " + why);
     }
     status_.setCounters(pipeline_.counters());
+    if (!thread_problem_said_) {
+      const std::string problem = pipeline_.newObjectsThreadProblem();
+      if (!problem.empty()) {
+        std::fprintf(stderr,
+                     "ptz-detect: the search for new objects runs at the frames' priority (%s): "
+                     "new_objects_thread_nice is -100 in the status\n",
+                     problem.c_str());
+        thread_problem_said_ = true;
+      }
+    }
   }
 
   // A process stopped between two publishes (a send wakes the receivers, whose answer may stop
@@ -124,6 +140,7 @@ class DetectNode {
   FreshnessGate select_gate_;
   DetectPipeline pipeline_;
   std::string appearance_;  // the appearance warning in the status
+  bool thread_problem_said_ = false;
   std::unique_ptr<SafeSubscription<ptzstereo::stereo_frame_t>> frames_;
   std::unique_ptr<SafeSubscription<ptzstereo::target_select_t>> selects_;
 };
@@ -140,6 +157,9 @@ int main(int argc, char** argv) {
   addTransportParams(params);
   declareRigParams(params);
   perception::declareDetectParams(params);
+  // One OpenCV thread per calling thread: both cameras run on forBothCameras' threads, and the
+  // niced search for new objects must not borrow OpenCV's pool (made at the frames' priority).
+  cv::setNumThreads(1);
   return runProcess(argc, argv, params, [](const Params& p, lcm::LCM& lcm) {
     perception::DetectConfig config = perception::DetectConfig::fromParams(p);
     perception::DetectNode node(p, &lcm, std::move(config), rigFromParams(p));

@@ -99,6 +99,10 @@ void declareDetectParams(Params& p) {
         "tracks: a track hidden in one view is moved by the other view's region alone, this soon "
         "after its last 3D measurement (its depth then from the prediction; 0: never)",
         Range::atLeast(0));
+  p.add("track_late_max_age_s", t.late_max_age_s, "s",
+        "tracks: what the search for new objects found in a frame joins the tracks while no "
+        "newer frame is more than this later (a search in the background may end frames later)",
+        Range::atLeast(0));
   p.add("trusted_area_ratio", 1.3, "",
         "left/right area ratio (zoom-corrected) beyond which an object is not trusted as a centre",
         Range::above(1));
@@ -143,6 +147,11 @@ void declareDetectParams(Params& p) {
         "markers: libapriltag finds tags in a band on the image reduced by this (1: full "
         "resolution, slower, finds smaller tags; windows are always at full resolution)",
         Range::between(1, 4));
+  p.add("marker_window_max_object_areas", m.window_max_object_areas, "",
+        "markers: a tagged track's window larger than this many times its object's own image "
+        "(a track lost a while, its window grown with its uncertainty) is searched with the band "
+        "for new tags, after the frame's messages, instead of before them",
+        Range::atLeast(1));
   p.add("marker_corner_sigma_px", m.pose.corner_sigma_px, "px",
         "markers: a tag corner's noise, the floor of the pose's covariance", Range::above(0));
   p.add("marker_max_rms_px", m.pose.max_rms_px, "px",
@@ -163,9 +172,21 @@ void declareDetectParams(Params& p) {
       "power spectral density per axis",
       Range::above(0));
   p.add("new_objects_after_publish", true,
-        "tags, faces and people: their band and strip for new objects are searched once the "
-        "frame's messages are out (the frame's pose waits for the tracked objects' windows alone; "
-        "a new one is in the messages from the next frame on); false: before");
+        "the search for new objects (the colours' band, the tags' band and lost tags' windows, the "
+        "people's strip) runs once the frame's messages are out (the frame's pose waits for the "
+        "tracked objects' windows alone; a new one is in the messages from the next frame on); "
+        "false: before them, in the frame");
+  p.add("new_objects_background", true,
+        "with a target, that search runs on a thread of its own beside the next frames, which do "
+        "not wait for it (a frame that comes while it runs is not searched); without one, and for "
+        "frames whose capture times are not the wall clock's (a lockstep simulator, a log replayed "
+        "an hour or more later), it runs in the frame's turn, so such a run gives the same tracks "
+        "every time; false: always in the frame's turn");
+  p.add("new_objects_nice_increment", 10, "",
+        "that thread's nice value above ptz-detect's, so the next frames and the loop's other "
+        "processes run first (a SCHED_FIFO or RR ptz-detect's is SCHED_OTHER instead, below them "
+        "already)",
+        Range::between(0, 19));
   const ClickedParams k;
   p.add("click_to_track", true,
         "TARGET_SELECT by an image point on no track starts a model of what is under it (its "
@@ -219,6 +240,7 @@ TrackerParams trackerParams(const Params& p) {
   t.recover_speed_m_s = p.getDouble("track_recover_speed_m_s");
   t.rank_sigma_cap_m = p.getDouble("track_rank_sigma_cap_m");
   t.view_max_depth_age_s = p.getDouble("track_view_max_depth_age_s");
+  t.late_max_age_s = p.getDouble("track_late_max_age_s");
   t.yaw_psd_rad2_s = p.getDouble("track_yaw_psd_rad2_s");
   t.yaw_gate_chi2 = p.getDouble("track_yaw_gate_chi2");
   t.rotation.accel_psd_rad2_s3 = p.getDouble("track_rotation_accel_psd_rad2_s3");
@@ -318,6 +340,7 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   }
   c.marker_scan.bands = p.getInt("marker_bands");
   c.marker_scan.band_decimate = p.getDouble("marker_band_decimate");
+  c.marker_scan.window_max_object_areas = p.getDouble("marker_window_max_object_areas");
   c.marker_scan.pose.corner_sigma_px = p.getDouble("marker_corner_sigma_px");
   c.marker_scan.pose.max_rms_px = p.getDouble("marker_max_rms_px");
   c.marker_scan.pose.max_corner_px = p.getDouble("marker_max_corner_px");
@@ -331,6 +354,8 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.people_scan.max_range_m = p.getDouble("max_range_m");
   c.click_to_track = p.getBool("click_to_track");
   c.new_objects_after_publish = p.getBool("new_objects_after_publish");
+  c.new_objects_background = p.getBool("new_objects_background");
+  c.new_objects_nice_increment = p.getInt("new_objects_nice_increment");
   c.clicked.patch_px = p.getInt("click_patch_px");
   c.clicked.min_score = p.getDouble("click_min_score");
   c.clicked.min_range_m = p.getDouble("min_range_m");
@@ -341,6 +366,7 @@ DetectConfig DetectConfig::fromParams(const Params& p) {
   c.stereo.min_range_m = p.getDouble("min_range_m");
   c.stereo.max_range_m = p.getDouble("max_range_m");
   c.tracker = trackerParams(p);
+  c.marker_scan.rotation = c.tracker.rotation;
   c.windows = windowParams(p);
   c.pick_radius_px = p.getDouble("pick_radius_px");
   c.trusted_area_ratio = p.getDouble("trusted_area_ratio");

@@ -45,6 +45,9 @@ struct DetectConfig {
   MarkerScanParams marker_scan;
   // Tags', faces' and people's search for new ones after the frame's messages (discover()).
   bool new_objects_after_publish = true;
+  // That search on a thread of its own (NewObjectSearch), this much nicer than ptz-detect.
+  bool new_objects_background = true;
+  int new_objects_nice_increment = 10;
   // A point on no track starts a model of what is under it (appearance/clicked.hpp).
   bool click_to_track = true;
   ClickedParams clicked;

@@ -7,6 +7,7 @@
 #include "common/measure.hpp"
 #include "perception/detect/detect_messages.hpp"
 #include "perception/detect/frame_pixels.hpp"
+#include "perception/detect/new_objects.hpp"
 
 namespace ptz::perception {
 namespace {
@@ -24,74 +25,15 @@ std::vector<std::string> classNames(const DetectorParams& dp,
   return names;
 }
 
-TrackMeasurement markerMeasurement(const MarkerObject& o, int object_index) {
-  TrackMeasurement m;
-  m.class_name = o.name;
-  m.position_m = o.pose.position_head_m;
-  m.covariance_m2 = o.pose.covariance.bottomRightCorner<3, 3>();
-  m.radius_m = o.radius_m;
-  m.object_index = object_index;
-  m.has_rotation = true;
-  m.rotation = Eigen::Quaterniond(o.pose.rotation_head_object).normalized();
-  m.rotation_covariance_rad2 = o.pose.covariance.topLeftCorner<3, 3>();
-  return m;
-}
-
-TrackMeasurement patchMeasurement(const PatchObject& o, int object_index) {
-  TrackMeasurement m;
-  m.class_name = o.class_name;
-  m.position_m = o.position_m;
-  m.covariance_m2 = o.covariance_m2;
-  m.radius_m = o.radius_m;
-  m.object_index = object_index;
-  return m;
+std::vector<std::string> colourClassNames(const DetectorParams& dp) {
+  std::vector<std::string> names;
+  for (const auto& c : dp.classes) names.push_back(c.name);
+  return names;
 }
 
 // A camera's view as the frame says its head stood.
 CameraView frameView(const StereoRig& rig, Side side, const ptzstereo::image_t& image) {
   return rig.view(side, {image.pan_rad, image.tilt_rad, image.zoom});
-}
-
-// Crops of both cameras' pixels, each from the parts decoded already where it can.
-void cropsOf(FramePixels* left, FramePixels* right, CropPixels crops[2]) {
-  FramePixels* pixels[2] = {left, right};
-  for (int s = 0; s < 2; ++s) {
-    crops[s] = [p = pixels[s]](const cv::Rect& r, cv::Mat* px, std::string* w) {
-      bool reused = false;
-      return p->crop(r, px, &reused, w);
-    };
-  }
-}
-
-// A frame's tags, faces and people in its windows or its band and strip (parts); OpenCV's or
-// libapriltag's refusal of some part of a frame costs that frame them (counted in *errors), never
-// the process. False when a crop fails (*why).
-bool scanTagsAndPeople(MarkerScanner* marker_scanner, PeopleScanner* people_scanner,
-                       const std::vector<Track>& tracks, const WindowParams& windows,
-                       ScanParts parts, double t_s, const CameraView& lv, const CameraView& rv,
-                       const CropPixels crops[2], MarkerScan* markers,
-                       std::vector<PatchObject>* people, std::map<std::string, int64_t>* errors,
-                       std::string* why) {
-  if (marker_scanner->enabled()) {
-    try {
-      if (!marker_scanner->scan(tracks, t_s, lv, rv, windows, crops, markers, why, parts)) {
-        return false;
-      }
-    } catch (const cv::Exception& e) {
-      *markers = {};
-      ++(*errors)["marker_errors"];
-    }
-  }
-  // Faces and people: found in the left view, ranged in the right.
-  if (people_scanner->enabled()) {
-    try {
-      if (!people_scanner->scan(tracks, t_s, lv, rv, crops, people, why, parts)) return false;
-    } catch (const cv::Exception& e) {
-      people->clear();
-      ++(*errors)["people_errors"];
-    }
-  }
-  return true;
 }
 
 }  // namespace
@@ -103,15 +45,29 @@ DetectPipeline::DetectPipeline(DetectConfig config, StereoRig rig)
       tracker_(config_.tracker),
       class_names_(classNames(detector_.params(), config_.markers, config_.people)),
       selector_(config_.target_class, class_names_, config_.pick_radius_px),
-      windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx()),
+      windows_(config_.windows, {rig_.left.width, rig_.left.height}, detector_.exactMarginPx(),
+               colourClassNames(config_.detector)),
       markers_(config_.markers, config_.marker_scan, {rig_.left.width, rig_.left.height}),
       people_(config_.people, config_.people_scan, {rig_.left.width, rig_.left.height}),
       clicked_(config_.clicked),
+      new_objects_(std::make_unique<NewObjectSearch>(
+          config_, class_names_, cv::Size(rig_.left.width, rig_.left.height),
+          config_.new_objects_after_publish && config_.new_objects_background,
+          config_.new_objects_nice_increment)),
       color_models_(config_.detector.classes.size()) {}
+
+DetectPipeline::~DetectPipeline() = default;
+
+std::string DetectPipeline::newObjectsThreadProblem() const {
+  return new_objects_->threadProblem();
+}
 
 bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* out,
                              std::string* why) {
   out->click_note.clear();
+  out->new_objects_note.clear();
+  // An earlier frame's new objects first: their tracks get windows in this one.
+  absorbNewObjects(false, &out->new_objects_note);
   const CameraView lv = frameView(rig_, Side::kLeft, m.left);
   const CameraView rv = frameView(rig_, Side::kRight, m.right);
   const double t_s = m.utime * 1e-6;
@@ -126,11 +82,15 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   // Windows around the tracks' predicted images, or the whole frames; decoding only what is
   // scanned. Left and right on two cores (the detector's gates are set before, read only there).
   ScanPlan plan = windows_.plan(tracker_.tracks(), t_s, lv, rv);
+  // The band for new objects waits for discover(), off the frame's latency.
+  pending_band_ = {};
+  if (config_.new_objects_after_publish) std::swap(pending_band_.rows, plan.band);
   if (config_.detector.adapt.follow) {
     std::vector<HueGate> gates;
     for (const ColorModel& model : color_models_) {
       gates.push_back(model.gate(t_s, config_.detector.adapt));
     }
+    pending_band_.gates = gates;
     detector_.setGates(std::move(gates));
   }
   std::vector<Region> lr, rr;
@@ -138,6 +98,12 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   if (!windows_.detect(detector_, &plan, left_pixels.pixels(), right_pixels.pixels(), &lr, &rr,
                        why)) {
     return false;
+  }
+  if (plan.full) {
+    pending_band_.rows = {};  // scanned whole: nothing is new to a band
+  } else {
+    pending_band_.tracked[0] = plan.left;
+    pending_band_.tracked[1] = plan.right;
   }
   const std::vector<StereoObject> objects = associate(lr, rr, lv, rv, config_.stereo);
   std::vector<TrackMeasurement> measurements = trackMeasurements(
@@ -198,31 +164,55 @@ bool DetectPipeline::process(const ptzstereo::stereo_frame_t& m, FrameOutputs* o
   return true;
 }
 
-bool DetectPipeline::discover(const ptzstereo::stereo_frame_t& m, std::string* why) {
-  if (!config_.new_objects_after_publish || (!markers_.enabled() && !people_.enabled())) {
+bool DetectPipeline::discover(const ptzstereo::stereo_frame_t& m, bool repeatable,
+                              std::string* why) {
+  ColourBand band = std::move(pending_band_);
+  pending_band_ = {};
+  if (!config_.new_objects_after_publish ||
+      (band.rows.empty() && config_.markers.empty() && config_.people.empty())) {
     return true;
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  const CameraView lv = frameView(rig_, Side::kLeft, m.left);
-  const CameraView rv = frameView(rig_, Side::kRight, m.right);
-  const double t_s = m.utime * 1e-6;
-  FramePixels left_pixels(m.left), right_pixels(m.right);
-  CropPixels crops[2];
-  cropsOf(&left_pixels, &right_pixels, crops);
-  MarkerScan markers;
-  std::vector<PatchObject> people;
-  if (!scanTagsAndPeople(&markers_, &people_, tracker_.tracks(), config_.windows, ScanParts::kNew,
-                         t_s, lv, rv, crops, &markers, &people, &scan_errors_, why)) {
+  // Without a target no pose waits, and finding one is all that matters: the search runs in the
+  // frame's turn, at the frames' priority, as in a run to be repeated.
+  const bool wait = repeatable || selector_.targetId() < 0;
+  // A search that ended meanwhile first (off the frame's latency: its messages are out); one that
+  // still runs, when this frame's must not be skipped.
+  std::string earlier;
+  if (!absorbNewObjects(wait, &earlier)) *why = earlier;
+  const bool has_band = !band.rows.empty();
+  if (!new_objects_->start(m, frameView(rig_, Side::kLeft, m.left),
+                           frameView(rig_, Side::kRight, m.right), tracker_.tracks(),
+                           std::move(band), wait)) {
+    ++counters_["new_object_searches_skipped"];  // the last frame's still runs
+    // Its band is the next windowed frame's again: skips must not leave rows unsearched.
+    if (has_band) windows_.retryBand();
+    return earlier.empty();
+  }
+  if (wait) return absorbNewObjects(true, why) && earlier.empty();
+  return earlier.empty();
+}
+
+bool DetectPipeline::absorbNewObjects(bool wait, std::string* why) {
+  std::optional<NewObjectsFound> found = new_objects_->collect(wait);
+  if (!found) return true;
+  if (!found->ok) {
     ++counters_["discoveries_failed"];
+    *why = "frame " + std::to_string(found->seq) + ": " + found->why;
+    setTrackAndScanCounters();
     return false;
   }
-  std::vector<TrackMeasurement> found;  // in none of the frame's messages
-  for (const MarkerObject& o : markers.objects) found.push_back(markerMeasurement(o, -1));
-  for (const PatchObject& o : people) found.push_back(patchMeasurement(o, -1));
-  tracker_.updateLate(t_s, found);
-  discovery_ms_.push_back(
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  const int64_t dropped = tracker_.lateDropped();
+  tracker_.updateLate(found->t_s, found->found);
+  discovery_ms_.push_back(found->ms);
   setTrackAndScanCounters();
+  if (tracker_.lateDropped() > dropped) {
+    // Ended too long after its frame (a loaded machine): what it found is of no use. Said, so that
+    // a search that never keeps up is not mistaken for an empty scene.
+    ++counters_["new_objects_too_late"];
+    *why = "frame " + std::to_string(found->seq) + ": it ended more than track_late_max_age_s " +
+           "after its frame; its " + std::to_string(found->found.size()) + " finds were dropped";
+    return false;
+  }
   if (discovery_ms_.size() >= 30) {
     counters_["discovery_us_p50"] = static_cast<int64_t>(percentile(discovery_ms_, 50) * 1000);
     counters_["discovery_us_p99"] = static_cast<int64_t>(percentile(discovery_ms_, 99) * 1000);
@@ -350,11 +340,15 @@ void DetectPipeline::setTrackAndScanCounters() {
   counters_["late_starts"] = tracker_.lateStarts();
   counters_["late_dropped"] = tracker_.lateDropped();
   for (const auto& [reason, n] : tracker_.untrustedCounts()) counters_["untrusted_" + reason] = n;
+  // The windows' scanners and the search for new objects count alike: their sums.
   using Counts = std::map<std::string, int64_t>;
+  Counts sums;
   for (const Counts* counts :
-       {&markers_.counts(), &people_.counts(), static_cast<const Counts*>(&scan_errors_)}) {
-    for (const auto& [name, n] : *counts) counters_[name] = n;
+       {&windows_.counts(), &markers_.counts(), &people_.counts(),
+        static_cast<const Counts*>(&scan_errors_), &new_objects_->counts()}) {
+    for (const auto& [name, n] : *counts) sums[name] += n;
   }
+  for (const auto& [name, n] : sums) counters_[name] = n;
 }
 
 void DetectPipeline::learnColour(double t_s, int64_t target_id,
@@ -406,7 +400,6 @@ void DetectPipeline::learnColour(double t_s, int64_t target_id,
 void DetectPipeline::setCounters(int64_t target_id, int64_t target_index) {
   setTrackAndScanCounters();
   counters_["target_id"] = target_id;
-  for (const auto& [name, n] : windows_.counts()) counters_[name] = n;
   ++counters_["frames_processed"];
   if (target_index < 0) ++counters_["frames_without_target"];
   if (processing_ms_.size() >= 30) {

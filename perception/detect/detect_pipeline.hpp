@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <deque>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -20,6 +21,7 @@
 #include "common/rig.hpp"
 #include "perception/appearance/clicked.hpp"
 #include "perception/detect/detect_params.hpp"
+#include "perception/detect/new_objects.hpp"
 #include "perception/tracking/target.hpp"
 #include "ptzstereo/object_detections_t.hpp"
 #include "ptzstereo/object_pose_t.hpp"
@@ -41,12 +43,15 @@ struct FrameOutputs {
   bool target_reason_changed = false;
   // A click's model started or refused, or its object lost, in this frame (said on stderr).
   std::string click_note;
+  // The search for new objects of an earlier frame failed (discover(); said on stderr).
+  std::string new_objects_note;
 };
 
 class DetectPipeline {
  public:
   // rig: the frames' rig (its image size is theirs).
   DetectPipeline(DetectConfig config, StereoRig rig);
+  ~DetectPipeline();
 
   // One frame, accepted already (checkStereoFrame; checkFrameMatchesRig: the rig's size, in
   // colour): its messages in *out. False and *why when an image does not decode (the frame is
@@ -55,9 +60,16 @@ class DetectPipeline {
   // The search for new tags, faces and people in the frame process() took last (a band and a
   // strip of it), once its messages are out: the latency of the frame's pose is its tracked
   // objects' alone. What it finds joins the tracker at the frame's time (Tracker::updateLate): new
-  // objects start tracks, which the next frame's windows confirm and its messages carry. False
-  // and *why when a part does not decode (counted).
-  bool discover(const ptzstereo::stereo_frame_t& frame, std::string* why);
+  // objects start tracks, which the next frame's windows confirm and its messages carry. With
+  // new_objects_background it runs on a thread of its own (NewObjectSearch) and joins the tracker
+  // when a later frame is processed (not searched while it runs: counted). The frame waits for it
+  // while there is no target (no pose to delay; finding one is what matters) and when repeatable
+  // (a run to be repeated bit for bit; ptz-detect asks it of frames whose capture times are not
+  // the wall clock's). False and *why when a part does not decode (counted; in the background:
+  // said by the next frame's FrameOutputs::new_objects_note).
+  bool discover(const ptzstereo::stereo_frame_t& frame, bool repeatable, std::string* why);
+  // Why the search's thread could not be made nicer ("" when it was, or there is none).
+  std::string newObjectsThreadProblem() const;
 
   // A TARGET_SELECT request (fresh: the main judged it) against the tracks and the views of the
   // newest frame processed. False and *why when it cannot be met: an unknown class, track or
@@ -117,6 +129,9 @@ class DetectPipeline {
                    const std::vector<Region>& rr);
   // The tracker's counts, the scanners' and their errors into counters_.
   void setTrackAndScanCounters();
+  // The search for new objects that ended (wait: the running one's, once it ends) joins the
+  // tracker. False and *why when it failed.
+  bool absorbNewObjects(bool wait, std::string* why);
 
   DetectConfig config_;
   StereoRig rig_;
@@ -128,6 +143,8 @@ class DetectPipeline {
   MarkerScanner markers_;
   PeopleScanner people_;
   ClickedTracker clicked_;
+  std::unique_ptr<NewObjectSearch> new_objects_;
+  ColourBand pending_band_;  // the last frame's, for discover()
   // A click on no track, waiting for the next frame's pixels to start a model: its camera and the
   // head-frame direction of its pixel in the frame it was made on (the heads may turn meanwhile).
   std::optional<std::pair<Side, Eigen::Vector3d>> pending_click_;

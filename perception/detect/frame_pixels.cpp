@@ -95,4 +95,14 @@ bool FramePixels::crop(const cv::Rect& rect, cv::Mat* out, bool* reused, std::st
   return decodeRect(m_, rect, out, why);
 }
 
+void cropsOf(FramePixels* left, FramePixels* right, CropPixels crops[2]) {
+  FramePixels* pixels[2] = {left, right};
+  for (int s = 0; s < 2; ++s) {
+    crops[s] = [p = pixels[s]](const cv::Rect& r, cv::Mat* px, std::string* w) {
+      bool reused = false;
+      return p->crop(r, px, &reused, w);
+    };
+  }
+}
+
 }  // namespace ptz::perception

@@ -49,4 +49,8 @@ class FramePixels {
   std::vector<std::pair<cv::Rect, cv::Mat>> decoded_;
 };
 
+// Both cameras' crops (CropPixels) of a frame's pixels, each from the parts decoded already where
+// it can.
+void cropsOf(FramePixels* left, FramePixels* right, CropPixels crops[2]);
+
 }  // namespace ptz::perception

@@ -5,10 +5,94 @@
 
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <thread>
 
 #include "perception/detection/pyramid.hpp"
 
 namespace ptz::perception {
+namespace {
+
+// The second camera's thread of one calling thread.
+class Lane {
+ public:
+  Lane() : thread_([this] { loop(); }) {}
+  ~Lane() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+  }
+  void start(const std::function<void(int)>* fn) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    job_ = fn, error_ = nullptr;
+    wake_.notify_all();
+  }
+  std::exception_ptr wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [this] { return job_ == nullptr; });
+    return error_;
+  }
+
+ private:
+  void loop();
+
+  std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  const std::function<void(int)>* job_ = nullptr;
+  std::exception_ptr error_;
+  bool stop_ = false;
+  std::thread thread_;  // last: it starts on the members above
+};
+
+thread_local bool in_both = false;  // inside forBothCameras: a nested call runs in turn
+
+void Lane::loop() {
+  in_both = true;
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [this] { return stop_ || job_ != nullptr; });
+    if (stop_) return;
+    const std::function<void(int)>* fn = job_;
+    lock.unlock();
+    std::exception_ptr error;
+    try {
+      (*fn)(1);
+    } catch (...) {
+      error = std::current_exception();
+    }
+    lock.lock();
+    error_ = error, job_ = nullptr;
+    done_.notify_all();
+  }
+}
+
+}  // namespace
+
+void forBothCameras(const std::function<void(int side)>& fn) {
+  if (in_both) {
+    fn(0);
+    fn(1);
+    return;
+  }
+  thread_local Lane lane;
+  in_both = true;
+  lane.start(&fn);
+  std::exception_ptr mine;
+  try {
+    fn(0);
+  } catch (...) {
+    mine = std::current_exception();
+  }
+  const std::exception_ptr theirs = lane.wait();
+  in_both = false;
+  if (mine) std::rethrow_exception(mine);
+  if (theirs) std::rethrow_exception(theirs);
+}
 
 bool projectSphere(const CameraView& view, const Eigen::Vector3d& p_head, double radius_m,
                    double margin_px, cv::Rect* rect) {
@@ -48,16 +132,11 @@ bool projectBox(const CameraView& view, const Eigen::Vector3d& p_head,
 bool trackWindow(const CameraView& view, const Track& track, double t_s, const WindowParams& p,
                  cv::Rect* rect) {
   if (track.radius_m <= 0) return false;
-  // The position's covariance carried to t_s by the motion model (p + v dt + a dt^2 / 2); the
-  // process noise of one frame is small beside the margin.
-  const double dt = std::max(0.0, t_s - track.t_s);
-  Eigen::Matrix<double, 3, 9> J;
-  J << Eigen::Matrix3d::Identity(), dt * Eigen::Matrix3d::Identity(),
-      dt * dt / 2 * Eigen::Matrix3d::Identity();
   // In the camera's frame the k-sigma ellipsoid's bounding box is k sqrt(C_ii) along each axis:
-  // the depth's larger uncertainty does not widen the window across the image.
+  // the depth's larger uncertainty does not widen the window across the image. The process noise
+  // of one frame is small beside the margin.
   const Eigen::Matrix3d R = view.rotation_head_camera.transpose();
-  const Eigen::Matrix3d cov = R * (J * track.P * J.transpose()) * R.transpose();
+  const Eigen::Matrix3d cov = R * track.positionCovarianceAt(t_s) * R.transpose();
   const Eigen::Vector3d sigma = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
   return projectBox(view, track.positionAt(t_s),
                     Eigen::Vector3d::Constant(track.radius_m) + p.sigma_scale * sigma, p.margin_px,
@@ -83,8 +162,9 @@ std::vector<cv::Rect> mergeRects(std::vector<cv::Rect> rects) {
   return rects;
 }
 
-WindowScanner::WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px)
-    : p_(params), size_(image_size), margin_px_(exact_margin_px) {
+WindowScanner::WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px,
+                             std::vector<std::string> classes)
+    : p_(params), size_(image_size), margin_px_(exact_margin_px), classes_(std::move(classes)) {
   for (const char* k :
        {"frames_scanned_full", "frames_scanned_windowed", "windows_grown",
         "windows_cut_to_full_scan", "windows_unbounded", "full_scans_disabled",
@@ -113,6 +193,11 @@ ScanPlan WindowScanner::plan(const std::vector<Track>& tracks, double t_s, const
   bool any = false;
   for (const auto& t : tracks) {
     if (t.state == TrackState::kTentative) continue;
+    if (!classes_.empty() &&
+        std::find(classes_.begin(), classes_.end(), t.class_name) == classes_.end()) {
+      any = true;  // another scanner's object: the frame stays windowed, with its band
+      continue;
+    }
     cv::Rect l, r;
     if (!trackWindow(left, t, t_s, p_, &l) || !trackWindow(right, t, t_s, p_, &r)) {
       // A coasting track unseen for a while: its uncertainty reaches behind a camera and bounds
@@ -284,11 +369,7 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
   std::vector<cv::Rect>* windows[2] = {&plan->left, &plan->right};
   std::string errors[2];
   bool ok[2] = {true, true}, cut[2] = {false, false};
-  const auto both = [&](const std::function<void(int)>& side) {
-    cv::parallel_for_(cv::Range(0, 2), [&](const cv::Range& range) {
-      for (int i = range.start; i < range.end; ++i) side(i);
-    });
-  };
+  const auto both = forBothCameras;
   const auto failed = [&] {
     if (ok[0] && ok[1]) return false;
     *why = ok[0] ? "right image: " + errors[1] : "left image: " + errors[0];
@@ -367,6 +448,41 @@ bool WindowScanner::detect(const Detector& detector, ScanPlan* plan, const Image
     since_full_ = std::min(since_full_ + 1, p_.full_scan_every);
     if (!plan->band.empty()) ++counts_["bands_scanned"];
   }
+  return true;
+}
+
+bool WindowScanner::detectBand(const Detector& detector, const cv::Rect& band,
+                               const std::vector<cv::Rect> tracked[2], const ImagePixels& left,
+                               const ImagePixels& right, std::vector<Region>* left_regions,
+                               std::vector<Region>* right_regions, std::string* why) {
+  left_regions->clear();
+  right_regions->clear();
+  if (band.empty()) return true;
+  const ImagePixels* pixels[2] = {&left, &right};
+  std::vector<Region>* out[2] = {left_regions, right_regions};
+  std::string errors[2];
+  bool ok[2] = {true, true}, cut[2] = {false, false};
+  const int scale = pyramidScale(size_.width, p_.full_scan_max_width_px);
+  forBothCameras([&](int i) {
+    std::vector<cv::Rect> found;
+    ok[i] = bandWindows(detector, scale, band, *pixels[i], tracked[i], &found, &errors[i]);
+    if (!ok[i] || found.empty()) return;
+    found = mergeRects(found);
+    ok[i] = detectSide(detector, found, pixels[i]->parts, out[i], &cut[i], &errors[i]);
+    if (!ok[i] || !cut[i]) return;
+    // An object larger than its window: grown once; still cut, the next band or the windows of
+    // its track (once one starts) see it whole.
+    ok[i] = detectSide(detector, grow(found), pixels[i]->parts, out[i], &cut[i], &errors[i]);
+    if (ok[i] && cut[i]) out[i]->clear();
+  });
+  if (!ok[0] || !ok[1]) {
+    *why = ok[0] ? "right image: " + errors[1] : "left image: " + errors[0];
+    return false;
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (cut[i]) ++counts_["band_windows_cut"];
+  }
+  ++counts_["bands_scanned"];
   return true;
 }
 

@@ -89,6 +89,12 @@ enum class ScanParts { kWindows, kNew, kBoth };
 // The pixels of `rect` (full-image coordinates, inside the image) of one camera's image, 8-bit BGR:
 // how the markers' and the clicked objects' searches read a frame.
 using CropPixels = std::function<bool(const cv::Rect& rect, cv::Mat* out, std::string* why)>;
+// fn(0) and fn(1) at once, both cameras' halves of a scan: fn(1) on a thread of the calling
+// thread's own (made at its first call, so of that thread's priority), fn(0) in the caller; returns
+// once both have, rethrowing either's exception. Not OpenCV's pool: its one pool is shared by every
+// thread, and a call from another thread (ptz-detect's search for new objects) made it serial. A
+// call from inside fn runs both in turn.
+void forBothCameras(const std::function<void(int side)>& fn);
 // A camera's pixels: parts at full resolution, and rows reduced (when empty: the rows from
 // `parts`, reduced by cv::resize INTER_AREA). Implicit: parts alone will do.
 struct ImagePixels {
@@ -100,8 +106,11 @@ struct ImagePixels {
 
 class WindowScanner {
  public:
-  // exact_margin_px: the detector's (Detector::exactMarginPx).
-  WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px);
+  // exact_margin_px: the detector's (Detector::exactMarginPx). classes: the tracks' classes that
+  // get windows (the detector's; empty: every track's); a track of another class (a tag, a person)
+  // is looked for by its own scanner, and only keeps the frame windowed.
+  WindowScanner(WindowParams params, cv::Size image_size, int exact_margin_px,
+                std::vector<std::string> classes = {});
 
   // The plan of the next frame at t_s from the tracks (predicted to t_s) and the frame's views;
   // advances the periodic count (or the band).
@@ -118,7 +127,22 @@ class WindowScanner {
               const ImagePixels& right, std::vector<Region>* left_regions,
               std::vector<Region>* right_regions, std::string* why);
 
-  // frames_scanned_full, frames_scanned_windowed (bands_scanned of them with a band),
+  // The band of the last windowed plan was not searched (ptz-detect's search for new objects was
+  // busy): the next windowed plan takes it again, so no rows are left out for long.
+  void retryBand() { next_band_ = (next_band_ + p_.full_scan_every - 1) % p_.full_scan_every; }
+  // A windowed plan's band searched on its own (ptz-detect's search for new objects, once the
+  // frame's messages are out; `band` and the frame's windows `tracked` as detect() left them):
+  // windows around the band's candidates not inside a tracked window, grown once where a region
+  // crosses their edge (still crossing: its side's regions are dropped, counted
+  // band_windows_cut), their regions in both images. Counts bands_scanned. False when a decode
+  // fails (*why).
+  bool detectBand(const Detector& detector, const cv::Rect& band,
+                  const std::vector<cv::Rect> tracked[2], const ImagePixels& left,
+                  const ImagePixels& right, std::vector<Region>* left_regions,
+                  std::vector<Region>* right_regions, std::string* why);
+
+  // frames_scanned_full, frames_scanned_windowed, bands_scanned (the bands searched, in the frame
+  // or by detectBand),
   // full_scans_<reason>, windows_grown,
   // windows_cut_to_full_scan, windows_unbounded (coasting tracks left to the periodic scan in
   // windowed frames); of the full scans frames_scanned_pyramid, pyramid_fallbacks_<reason> (cut,
@@ -157,6 +181,7 @@ class WindowScanner {
   WindowParams p_;
   cv::Size size_;
   int margin_px_;
+  std::vector<std::string> classes_;
   int since_full_ = 0;  // windowed frames since the last full scan
   int next_band_ = 0;   // the band the next windowed frame scans
   std::map<std::string, int64_t> counts_;

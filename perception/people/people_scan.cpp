@@ -22,6 +22,69 @@ double overlap(const cv::Rect2d& a, const cv::Rect2d& b) {
 
 }  // namespace
 
+void hogMultiScale(const cv::HOGDescriptor& hog, const cv::Mat& img, cv::Size stride, double scale0,
+                   int final_threshold, std::vector<cv::Rect>* found,
+                   std::vector<double>* weights) {
+  found->clear();
+  weights->clear();
+  // The levels as OpenCV's detectMultiScale takes them (the last, too small, left out).
+  std::vector<double> levels;
+  double scale = 1;
+  for (int i = 0; i < hog.nlevels; ++i) {
+    if (cvRound(img.cols / scale) < hog.winSize.width ||
+        cvRound(img.rows / scale) < hog.winSize.height || scale0 <= 1) {
+      break;
+    }
+    levels.push_back(scale);
+    scale *= scale0;
+  }
+  if (levels.empty()) levels.push_back(1);
+  // Largest first, each to the thread with the fewer pixels so far.
+  std::vector<int> lane(levels.size());
+  double pixels[2] = {0, 0};
+  for (size_t i = 0; i < levels.size(); ++i) {
+    const int to = pixels[0] <= pixels[1] ? 0 : 1;
+    lane[i] = to;
+    pixels[to] += 1 / (levels[i] * levels[i]);
+  }
+  std::vector<cv::Rect> hits[2];
+  std::vector<double> hit_weights[2];
+  forBothCameras([&](int side) {
+    for (size_t i = 0; i < levels.size(); ++i) {
+      if (lane[i] != side) continue;
+      const double s = levels[i];
+      const cv::Size size(cvRound(img.cols / s), cvRound(img.rows / s));
+      cv::Mat level = img;
+      if (size != img.size()) cv::resize(img, level, size, 0, 0, cv::INTER_LINEAR_EXACT);
+      std::vector<cv::Point> at;
+      std::vector<double> w;
+      hog.detect(level, at, w, 0, stride, cv::Size());
+      const cv::Size box(cvRound(hog.winSize.width * s), cvRound(hog.winSize.height * s));
+      for (size_t j = 0; j < at.size(); ++j) {
+        hits[side].emplace_back(cvRound(at[j].x * s), cvRound(at[j].y * s), box.width, box.height);
+        hit_weights[side].push_back(j < w.size() ? w[j] : 0);
+      }
+    }
+  });
+  for (int side = 0; side < 2; ++side) {
+    found->insert(found->end(), hits[side].begin(), hits[side].end());
+    weights->insert(weights->end(), hit_weights[side].begin(), hit_weights[side].end());
+  }
+  hog.groupRectangles(*found, *weights, final_threshold, 0.2);
+  // Cut to the image; none left of one: dropped (OpenCV's clipObjects).
+  const cv::Rect image(0, 0, img.cols, img.rows);
+  size_t kept = 0;
+  for (size_t i = 0; i < found->size(); ++i) {
+    const cv::Rect r = (*found)[i] & image;
+    if (r.area() <= 0) continue;
+    (*found)[kept] = r;
+    if (i < weights->size()) (*weights)[kept] = (*weights)[i];
+    ++kept;
+  }
+  found->resize(kept);
+  weights->resize(std::min(weights->size(), kept));
+}
+
 PeopleScanner::PeopleScanner(std::vector<PeopleClass> classes, PeopleScanParams params,
                              cv::Size image)
     : classes_(std::move(classes)), p_(params), size_(image) {
@@ -70,9 +133,9 @@ std::vector<PeopleScanner::Box> PeopleScanner::detect(size_t c, const cv::Mat& g
     }
     if (img.cols < hog_.winSize.width || img.rows < hog_.winSize.height) return {};
     if (fine) {
-      window_hog_.detectMultiScale(img, found, weights, 0, cv::Size(4, 4), cv::Size(), 1.05, 2);
+      hogMultiScale(window_hog_, img, cv::Size(4, 4), 1.05, 2, &found, &weights);
     } else {
-      hog_.detectMultiScale(img, found, weights, 0, cv::Size(8, 8), cv::Size(), 1.05, 2);
+      hogMultiScale(hog_, img, cv::Size(8, 8), 1.05, 2, &found, &weights);
     }
   } else {
     const int min_px = static_cast<int>(k.min_box_px);

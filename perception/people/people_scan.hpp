@@ -38,6 +38,12 @@ struct PeopleScanParams {
   int max_per_class = 8;  // objects a class makes a frame (the rest counted)
 };
 
+// HOG's detectMultiScale (no padding, hit threshold 0, rectangles grouped) with its levels shared
+// by forBothCameras' two threads: OpenCV's own pool is off in ptz-detect (detect/new_objects.hpp).
+// The same levels, hits, grouping and cut to the image as OpenCV's.
+void hogMultiScale(const cv::HOGDescriptor& hog, const cv::Mat& img, cv::Size stride, double scale0,
+                   int final_threshold, std::vector<cv::Rect>* found, std::vector<double>* weights);
+
 class PeopleScanner {
  public:
   PeopleScanner(std::vector<PeopleClass> classes, PeopleScanParams params, cv::Size image);

@@ -52,6 +52,14 @@ Eigen::Vector3d Track::positionAt(double when_s) const {
   return x.head<3>() + dt * x.segment<3>(3) + dt * dt / 2 * x.tail<3>();
 }
 
+Eigen::Matrix3d Track::positionCovarianceAt(double when_s) const {
+  const double dt = std::max(0.0, when_s - t_s);
+  Eigen::Matrix<double, 3, 9> J;
+  J << Eigen::Matrix3d::Identity(), dt * Eigen::Matrix3d::Identity(),
+      dt * dt / 2 * Eigen::Matrix3d::Identity();
+  return J * P * J.transpose();
+}
+
 double Track::yawVarianceAt(double when_s, double yaw_psd_rad2_s) const {
   return yaw_var_rad2 + yaw_psd_rad2_s * std::max(0.0, when_s - yaw_t_s);
 }
@@ -349,27 +357,41 @@ bool Tracker::apply(Track* t, const TrackMeasurement& m, double t_s) {
 }
 
 void Tracker::updateLate(double t_s, const std::vector<TrackMeasurement>& measurements) {
-  if (!started_ || t_s != last_t_s_) {  // not the frame just updated: too late to be of use
+  // Of a frame after the newest (a new run of the source), or of one long past: of no use.
+  if (!started_ || t_s > last_t_s_ || last_t_s_ - t_s > p_.late_max_age_s) {
     late_dropped_ += static_cast<int64_t>(measurements.size());
     return;
   }
+  const double dt = last_t_s_ - t_s;  // 0: the frame update() took last
   for (const TrackMeasurement& m : measurements) {
     if (!m.position_m.allFinite()) continue;
-    // The nearest gated track of its class, by the update's cost.
+    // The nearest gated track of its class, by the update's cost, the measurement moved to now by
+    // the track's own motion since t_s (its velocity's uncertainty over that time added).
     Track* nearest = nullptr;
+    TrackMeasurement nearest_now;
     double best = std::numeric_limits<double>::infinity();
     for (Track& t : tracks_) {
       if (t.class_name != m.class_name) continue;
+      TrackMeasurement now = m;
+      if (dt > 0) {
+        // An approximation of an out-of-sequence update (the track's motion taken as known but
+        // for its velocity's spread); the orientation of then is not now's: left to the windows.
+        now.position_m += t.position() - t.positionAt(t_s);
+        now.covariance_m2 = m.covariance_m2 + dt * dt * t.velocityCovariance();
+        now.has_rotation = now.has_yaw = false;
+      }
       double log_det = 0;
-      const double d2 = distance2(t, m, &log_det);
-      if (d2 <= p_.gate_chi2 && d2 + log_det < best) best = d2 + log_det, nearest = &t;
+      const double d2 = distance2(t, now, &log_det);
+      if (d2 <= p_.gate_chi2 && d2 + log_det < best) {
+        best = d2 + log_det, nearest = &t, nearest_now = now;
+      }
     }
-    if (nearest && nearest->last_seen_s == t_s) {
-      ++late_known_;  // the frame's own measurement of it came first
+    if (nearest && nearest->last_seen_s >= t_s) {
+      ++late_known_;  // a measurement of it at that frame or since came first
       continue;
     }
     if (nearest) {
-      if (apply(nearest, m, t_s)) {
+      if (apply(nearest, nearest_now, last_t_s_)) {
         nearest->object_index = -1;  // in no message of the frame
         ++late_updates_;
         if (nearest->state == TrackState::kCoasting) nearest->state = TrackState::kConfirmed;
@@ -380,7 +402,13 @@ void Tracker::updateLate(double t_s, const std::vector<TrackMeasurement>& measur
       continue;
     }
     if (startIfTrusted(t_s, m)) {
-      tracks_.back().object_index = -1;
+      // Born at its frame's time, then predicted to the newest frame's like every track; seen as
+      // of the newest: the search's own delay does not count against its tentative gap, the next
+      // frames' windows have the whole of it to confirm it.
+      Track& born = tracks_.back();
+      predict(&born, last_t_s_);
+      born.last_seen_s = last_t_s_;
+      born.object_index = -1;
       ++late_starts_;
     }
   }

@@ -64,6 +64,9 @@ struct TrackerParams {
   // One view fixes two directions; the third (depth) comes from the track, so only this soon after
   // its last 3D measurement: a long-coasted depth has drifted (s).
   double view_max_depth_age_s = 0.5;
+  // updateLate's measurements older than the newest frame by more than this are dropped (s): a
+  // search for new objects that took longer (a loaded machine's, HOG's) says too little of now.
+  double late_max_age_s = 0.5;
 };
 
 enum class TrackState { kTentative, kConfirmed, kCoasting };
@@ -137,8 +140,10 @@ struct Track {
   Eigen::Vector3d acceleration() const { return x.tail<3>(); }
   Eigen::Matrix3d positionCovariance() const { return P.topLeftCorner<3, 3>(); }
   Eigen::Matrix3d velocityCovariance() const { return P.block<3, 3>(3, 3); }
-  // Position extrapolated to t_s by the motion model (no state change).
+  // Position extrapolated to t_s by the motion model (no state change), and its covariance carried
+  // there (p + v dt + a dt^2 / 2; the process noise of a frame or so is left out).
   Eigen::Vector3d positionAt(double t_s) const;
+  Eigen::Matrix3d positionCovarianceAt(double t_s) const;
   // The yaw's variance at t_s (the random walk's growth since yaw_t_s).
   double yawVarianceAt(double t_s, double yaw_psd_rad2_s) const;
 };
@@ -158,11 +163,13 @@ class Tracker {
   // and counts as updated (confirmed). views: the frame's cameras.
   void updateFromViews(double t_s, const std::vector<ViewMeasurement>& measurements,
                        const CameraView& left, const CameraView& right);
-  // Measurements of the frame update() took last (t_s: its time) found after its messages were
-  // out (ptz-detect's search for new objects, kept off the frame's latency): one gated by a track
-  // that frame saw already is dropped (counted known), one gated by a track it did not see updates
-  // that track (counted), any other trusted one starts a tentative track (counted). Of another
-  // frame's time: dropped, counted.
+  // Measurements of a frame update() took already (t_s: its time, the newest or up to
+  // late_max_age_s before it) found after its messages were out (ptz-detect's search for new
+  // objects, kept off the frames' latency), each moved to the newest frame's time by its track's
+  // own motion: one gated by a track seen at t_s or since is dropped (counted known), one gated by
+  // a track not seen since updates that track (counted), any other trusted one starts a tentative
+  // track at t_s, predicted to the newest time (counted). Of a later or older frame: dropped,
+  // counted.
   void updateLate(double t_s, const std::vector<TrackMeasurement>& measurements);
   // updateLate's counts since the start: known, updates, starts, dropped.
   int64_t lateKnown() const { return late_known_; }

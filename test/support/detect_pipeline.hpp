@@ -25,9 +25,12 @@ inline perception::DetectPipeline makeDetectPipeline(
   return perception::DetectPipeline(perception::DetectConfig::fromParams(p), rigFromParams(p));
 }
 
-// `frame` as frame *seq (then advanced) captured at 30 Hz.
+// `frame` as frame *seq (then advanced) captured at 30 Hz; repeatable: as ptz-detect judges frames
+// whose capture times are not the wall clock's (the next frame waits for this one's search for new
+// objects), else as it judges a camera's.
 inline perception::FrameOutputs feedFrame(perception::DetectPipeline* pipeline,
-                                          const ptzstereo::stereo_frame_t& frame, int64_t* seq) {
+                                          const ptzstereo::stereo_frame_t& frame, int64_t* seq,
+                                          bool repeatable = true) {
   ptzstereo::stereo_frame_t m = frame;
   m.seq = *seq;
   m.utime = 1'700'000'000'000'000 + *seq * 33'333;
@@ -35,7 +38,7 @@ inline perception::FrameOutputs feedFrame(perception::DetectPipeline* pipeline,
   perception::FrameOutputs out;
   std::string why;
   EXPECT_TRUE(pipeline->process(m, &out, &why)) << why;
-  EXPECT_TRUE(pipeline->discover(m, &why)) << why;  // as ptz-detect does once out is sent
+  EXPECT_TRUE(pipeline->discover(m, repeatable, &why)) << why;  // as ptz-detect once out is sent
   return out;
 }
 

@@ -7,6 +7,11 @@
 
 #include <Eigen/Geometry>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -158,6 +163,35 @@ TEST_F(MarkerPipeline, TaggedObjectsAreTracksWithTheirWholeOrientation) {
   EXPECT_GE(pipeline.counters().at("marker_objects"), 10);
   EXPECT_EQ(pipeline.counters().at("marker_bands_scanned"), 14);
   EXPECT_GT(pipeline.counters().at("track_rotations_accepted"), 10);
+}
+
+// A camera's frames do not wait for the search for new tags: it runs on its own thread, niced, and
+// a frame that comes while it runs is not searched (counted). The tags are found all the same, and
+// once the frames wait for it again (a repeatable run's) every frame is searched.
+TEST_F(MarkerPipeline, TheSearchForNewTagsRunsBesideTheNextFrames) {
+  perception::DetectPipeline pipeline = make();
+  auto count = [&](const char* name) {
+    const auto it = pipeline.counters().find(name);
+    return it == pipeline.counters().end() ? int64_t{0} : it->second;
+  };
+  perception::FrameOutputs out;
+  int fed = 0;
+  for (; fed < 14; ++fed) out = ptz::test::feedFrame(&pipeline, frame_, &seq_, false);
+  // Every frame's search either ran or was skipped, and not more than one ran at once.
+  for (int i = 0; i < 10; ++i, ++fed) out = feed(&pipeline);
+  EXPECT_EQ(count("marker_bands_scanned") + count("new_object_searches_skipped"), fed);
+  EXPECT_GE(count("marker_bands_scanned"), 10);
+  const auto* tool = trackOf(out, "tool");
+  ASSERT_NE(tool, nullptr);
+  ASSERT_NE(trackOf(out, "aruco#5"), nullptr);
+  EXPECT_EQ(tool->state, ptzstereo::object_track_t::STATE_CONFIRMED);
+  EXPECT_LT(angleDeg(tool->orientation_wxyz, scene_.objects[0].rotationHeadObject(0)), 1.0);
+  // Its thread is nicer than this one by new_objects_nice_increment (10).
+  errno = 0;
+  const int nice = getpriority(PRIO_PROCESS, static_cast<id_t>(gettid()));
+  ASSERT_EQ(errno, 0);
+  EXPECT_EQ(count("new_objects_thread_nice"), std::min(19, nice + 10));
+  EXPECT_EQ(pipeline.newObjectsThreadProblem(), "");
 }
 
 TEST_F(MarkerPipeline, TargetSelectByATagsClass) {

@@ -6,8 +6,14 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
 #include <random>
+#include <stdexcept>
+#include <thread>
+#include <vector>
 
 #include "common/transport/transport.hpp"
 #include "perception/detection/detector.hpp"
@@ -343,9 +349,15 @@ TEST(Windows, AJpegWindowIsExactlyThatPartOfAFullDecode) {
 // appears away from them at frame `appear`; the next full scan (within full_scan_every frames)
 // finds it. Windowed frames give exactly the full scan's regions of the ball.
 // Whole every n-th frame, or a band a frame: the box is found within n frames of appearing; in
-// bands, in a windowed frame, exactly as a full scan finds it.
-void findsANewObject(bool in_bands) {
-  SCOPED_TRACE(in_bands ? "in bands" : "whole every n-th frame");
+// bands, in a windowed frame, exactly as a full scan finds it; a band searched on its own after the
+// frame's windows (ptz-detect's search for new objects) finds it as exactly, and the frame's
+// windows only the ball.
+enum class NewObjects { kWholeFrames, kBands, kBandAfter };
+void findsANewObject(NewObjects mode) {
+  const bool in_bands = mode != NewObjects::kWholeFrames;
+  SCOPED_TRACE(mode == NewObjects::kWholeFrames ? "whole every n-th frame"
+               : mode == NewObjects::kBands     ? "in bands"
+                                                : "band after the windows");
   const StereoRig rig = StereoRig::makeDefault();
   const perception::Detector detector(defaultClasses());
   const std::vector<std::string> names = {"red_ball", "green_box", "blue_ball"};
@@ -371,10 +383,31 @@ void findsANewObject(bool in_bands) {
     s.advanceTo(t);
     const sim::SimFrame f = s.capture();
     perception::ScanPlan plan = scanner.plan(tracker.tracks(), t, lv, rv);
+    cv::Rect band;
+    if (mode == NewObjects::kBandAfter) std::swap(band, plan.band);
     std::vector<perception::Region> lr, rr;
     std::string why;
     ASSERT_TRUE(scanner.detect(detector, &plan, fromMat(f.left), fromMat(f.right), &lr, &rr, &why))
         << why;
+    if (mode == NewObjects::kBandAfter && !plan.full) {
+      const std::vector<cv::Rect> tracked[2] = {plan.left, plan.right};
+      std::vector<perception::Region> bl, br;
+      ASSERT_TRUE(scanner.detectBand(detector, band, tracked, fromMat(f.left), fromMat(f.right),
+                                     &bl, &br, &why))
+          << why;
+      const auto box = [](std::vector<perception::Region> v) {
+        v.erase(
+            std::remove_if(v.begin(), v.end(), [](const auto& r) { return r.class_index != 1; }),
+            v.end());
+        return v;
+      };
+      if (!bl.empty()) {
+        expectSame(bl, box(detector.detect(f.left)), "left band " + std::to_string(i));
+        expectSame(br, box(detector.detect(f.right)), "right band " + std::to_string(i));
+        lr.insert(lr.end(), bl.begin(), bl.end());
+        rr.insert(rr.end(), br.begin(), br.end());
+      }
+    }
     bool box_seen = false;
     for (const auto& r : lr) box_seen = box_seen || r.class_index == 1;
     if (!plan.full && !box_seen) {
@@ -395,10 +428,12 @@ void findsANewObject(bool in_bands) {
         t, perception::trackMeasurements(objects, lr, rr, lv, rv, names, 1.3, tracker.tracks(), t));
     if (box_seen) {
       found_at = i;
-      if (in_bands) {
+      if (mode == NewObjects::kBands) {
         EXPECT_FALSE(plan.full) << plan.reason;
         expectSame(lr, detector.detect(f.left), "left frame " + std::to_string(i));
         expectSame(rr, detector.detect(f.right), "right frame " + std::to_string(i));
+      } else if (mode == NewObjects::kBandAfter) {
+        EXPECT_FALSE(plan.full) << plan.reason;
       } else {
         EXPECT_TRUE(plan.full) << "found in a window";
       }
@@ -410,11 +445,15 @@ void findsANewObject(bool in_bands) {
 }
 
 TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundByTheNextFullScan) {
-  findsANewObject(false);
+  findsANewObject(NewObjects::kWholeFrames);
 }
 
 TEST(Windows, ANewObjectAwayFromTheWindowsIsFoundExactlyInItsBand) {
-  findsANewObject(true);
+  findsANewObject(NewObjects::kBands);
+}
+
+TEST(Windows, ABandSearchedAfterTheWindowsFindsTheNewObjectAsExactly) {
+  findsANewObject(NewObjects::kBandAfter);
 }
 
 // A track whose radius is too small for its object: the window cuts the ball; grown once it
@@ -513,4 +552,45 @@ TEST(Windows, At1080pANewObjectTallerThanABandIsFoundExactly) {
   EXPECT_EQ(scanner.counts().at("frames_scanned_full"), full_before);  // none since
   EXPECT_LT(full_before, appear);
   EXPECT_GT(scanner.counts().at("bands_scanned"), 0);
+}
+
+// Both cameras' halves run at once on two threads (the first waits for the second, which a run in
+// turn would never let happen), the second on the same thread call after call; either's exception
+// reaches the caller; a call from inside runs both in turn.
+TEST(Windows, BothCamerasRunAtOnceOnTwoThreads) {
+  std::mutex m;
+  std::condition_variable cv;
+  std::thread::id ids[2], lane;
+  for (int call = 0; call < 3; ++call) {
+    bool second_started = false, met = false;
+    ptz::perception::forBothCameras([&](int side) {
+      std::unique_lock<std::mutex> lock(m);
+      ids[side] = std::this_thread::get_id();
+      if (side == 1) {
+        second_started = true;
+        cv.notify_all();
+      } else {
+        met = cv.wait_for(lock, std::chrono::seconds(30), [&] { return second_started; });
+      }
+    });
+    EXPECT_TRUE(met);
+    EXPECT_EQ(ids[0], std::this_thread::get_id());
+    EXPECT_NE(ids[1], ids[0]);
+    if (call > 0) {
+      EXPECT_EQ(ids[1], lane);
+    }
+    lane = ids[1];
+  }
+  for (int thrower = 0; thrower < 2; ++thrower) {
+    EXPECT_THROW(ptz::perception::forBothCameras([&](int side) {
+                   if (side == thrower) throw std::runtime_error("side");
+                 }),
+                 std::runtime_error);
+  }
+  std::vector<int> order;
+  ptz::perception::forBothCameras([&](int side) {
+    if (side != 0) return;
+    ptz::perception::forBothCameras([&](int inner) { order.push_back(inner); });
+  });
+  EXPECT_EQ(order, (std::vector<int>{0, 1}));
 }

@@ -14,6 +14,7 @@
 #include "perception/markers/marker_detector.hpp"
 #include "perception/markers/marker_params.hpp"
 #include "perception/markers/marker_pose.hpp"
+#include "perception/markers/marker_scan.hpp"
 #include "sim/simulator.hpp"
 #include "support/render_aimed.hpp"
 
@@ -87,6 +88,21 @@ std::vector<Eigen::Vector3d> trueCorners(const sim::SceneObject& o, const sim::S
     out.push_back(c + R * (t.centre_m + t.rotation_object_tag * k));
   }
   return out;
+}
+
+// A tag of 0.14 m on each side of a cube of half extent h (ids 0-3), and their class (a bundle).
+std::vector<sim::SceneTag> cubeTags(double h) {
+  const double s = 0.14;
+  return {tag("apriltag_36h11", 0, s, {0, 0, -h}, 0), tag("apriltag_36h11", 1, s, {h, 0, 0}, -90),
+          tag("apriltag_36h11", 2, s, {0, 0, h}, 180), tag("apriltag_36h11", 3, s, {-h, 0, 0}, 90)};
+}
+
+perception::MarkerClass bundleOf(const std::vector<sim::SceneTag>& tags) {
+  perception::MarkerClass mc;
+  mc.name = "tool";
+  mc.size_m = tags.at(0).size_m;
+  for (const auto& t : tags) mc.bundle.push_back({t.id, t.centre_m, t.rotation_object_tag});
+  return mc;
 }
 
 double angleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
@@ -226,14 +242,9 @@ TEST(MarkerPose, SingleTagAgainstTruth) {
 // tags are seen, through a whole turn: within 1 degree where two faces are seen, else within 4
 // sigma of its covariance (one face squarely seen, as a single tag).
 TEST(MarkerPose, BundleThroughAWholeTurn) {
-  const double h = 0.1, s = 0.14;
-  const std::vector<sim::SceneTag> tags = {
-      tag("apriltag_36h11", 0, s, {0, 0, -h}, 0), tag("apriltag_36h11", 1, s, {h, 0, 0}, -90),
-      tag("apriltag_36h11", 2, s, {0, 0, h}, 180), tag("apriltag_36h11", 3, s, {-h, 0, 0}, 90)};
-  perception::MarkerClass mc;
-  mc.name = "tool";
-  mc.size_m = s;
-  for (const auto& t : tags) mc.bundle.push_back({t.id, t.centre_m, t.rotation_object_tag});
+  const double h = 0.1;
+  const std::vector<sim::SceneTag> tags = cubeTags(h);
+  const perception::MarkerClass mc = bundleOf(tags);
   const Eigen::Vector3d centre(-0.1, 0.1, 2.0);
   for (double yaw_deg = 0; yaw_deg < 360; yaw_deg += 30) {
     const sim::SceneObject box = taggedBox(centre, h, yaw_deg, 10, tags);
@@ -258,6 +269,103 @@ TEST(MarkerPose, BundleThroughAWholeTurn) {
     EXPECT_LT(angle_deg, 4 * sigma_deg) << "yaw " << yaw_deg;
     EXPECT_LT(err_pct, 0.3) << "yaw " << yaw_deg;
   }
+}
+
+// A tracked tagged object is looked for in a window around each of its tags that faces the camera
+// (from its track's orientation), far smaller than the object's window, each holding its tag's true
+// corners 2 px clear; there the object's tags are found as in the whole images. A track lost a
+// while (its window mostly uncertainty) is looked for with the band, not in the frame's windows.
+TEST(MarkerScanner, ATrackedObjectIsLookedForAroundTheTagsThatFaceTheCamera) {
+  const double h = 0.1;
+  const std::vector<sim::SceneTag> tags = cubeTags(h);
+  const perception::MarkerClass mc = bundleOf(tags);
+  const Eigen::Vector3d centre(-0.1, 0.1, 2.0);
+  const sim::SceneObject box = taggedBox(centre, h, 45, 10, tags);
+  const Frame f = render(box, centre, 1);
+  const double t_s = 0.05;
+  perception::Track track;
+  track.class_name = "tool";
+  track.state = perception::TrackState::kConfirmed;
+  track.x.head<3>() = centre;
+  track.P = Eigen::Matrix<double, 9, 9>::Identity() * 1e-6;
+  track.radius_m = mc.radiusM();
+  track.t_s = t_s;
+  track.rotation.ok = true;
+  track.rotation.rotation = Eigen::Quaterniond(box.rotationHeadObject(t_s));
+  track.rotation.covariance = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
+  track.rotation.t_s = t_s;
+  const cv::Size image(f.left.cols, f.left.rows);
+  perception::MarkerScanParams params;
+  params.window_max_object_areas = 4;  // this near, 9 would be half the image
+  perception::MarkerScanner scanner({mc}, params, image);
+  const perception::WindowParams wp;
+  // The tags that face each camera, by the truth: two at 45 degrees of yaw.
+  for (const CameraView* view : {&f.left_view, &f.right_view}) {
+    std::vector<const sim::SceneTag*> facing;
+    for (const sim::SceneTag& t : tags) {
+      const std::vector<Eigen::Vector3d> c = trueCorners(box, t);
+      Eigen::Vector3d cam[4];
+      for (int i = 0; i < 4; ++i) cam[i] = view->toCamera(c[static_cast<size_t>(i)]);
+      const Eigen::Vector3d n = (cam[1] - cam[0]).cross(cam[3] - cam[0]).normalized();
+      if (n.dot(((cam[0] + cam[2]) / 2).normalized()) > 0.1) facing.push_back(&t);
+    }
+    ASSERT_EQ(facing.size(), 2u);
+    std::vector<cv::Rect> windows;
+    ASSERT_TRUE(scanner.tagWindows(*view, track, mc, t_s, wp, &windows));
+    ASSERT_EQ(windows.size(), facing.size());
+    cv::Rect object;
+    ASSERT_TRUE(perception::trackWindow(*view, track, t_s, wp, &object));
+    for (size_t k = 0; k < windows.size(); ++k) {
+      EXPECT_LT(windows[k].area(), object.area() / 3);
+      const cv::Rect inner(windows[k].x + 2, windows[k].y + 2, windows[k].width - 4,
+                           windows[k].height - 4);
+      for (const Eigen::Vector3d& c : trueCorners(box, *facing[k])) {
+        const Eigen::Vector2d px = view->project(c);
+        EXPECT_TRUE(inner.contains(cv::Point(static_cast<int>(px.x()), static_cast<int>(px.y()))))
+            << "tag " << facing[k]->id << " corner " << px.transpose();
+      }
+    }
+  }
+  const perception::CropPixels crops[2] = {[&](const cv::Rect& r, cv::Mat* out, std::string*) {
+                                             *out = f.left(r);
+                                             return true;
+                                           },
+                                           [&](const cv::Rect& r, cv::Mat* out, std::string*) {
+                                             *out = f.right(r);
+                                             return true;
+                                           }};
+  perception::MarkerScan found;
+  std::string why;
+  ASSERT_TRUE(scanner.scan({track}, t_s, f.left_view, f.right_view, wp, crops, &found, &why,
+                           perception::ScanParts::kWindows))
+      << why;
+  ASSERT_EQ(found.objects.size(), 1u);
+  perception::MarkerDetector whole({mc});
+  EXPECT_EQ(found.sightings[0].size(), whole.detect(f.left, {0, 0}, nullptr, 1).size());
+  EXPECT_EQ(found.sightings[1].size(), whole.detect(f.right, {0, 0}, nullptr, 1).size());
+  EXPECT_EQ(found.sightings[0].size(), 2u);
+  EXPECT_LT(angleDeg(found.objects[0].pose.rotation_head_object, box.rotationHeadObject(t_s)), 1.0);
+  EXPECT_EQ(scanner.counts().at("marker_tag_windows"), 2);
+  // Lost: coasting with 8 cm of uncertainty, a window over 4 times the object's (not yet half the
+  // image). Not in the frame's windows; with the band, in its own window. A track that does not
+  // coast is never lost (a new one's window is wide, its speed not known yet).
+  track.state = perception::TrackState::kCoasting;
+  ASSERT_FALSE(scanner.lost(f.left_view, track, t_s, wp));
+  track.P = Eigen::Matrix<double, 9, 9>::Identity() * 0.08 * 0.08;
+  ASSERT_TRUE(scanner.lost(f.left_view, track, t_s, wp));
+  track.state = perception::TrackState::kTentative;
+  EXPECT_FALSE(scanner.lost(f.left_view, track, t_s, wp));
+  track.state = perception::TrackState::kCoasting;
+  cv::Rect grown;
+  ASSERT_TRUE(perception::trackWindow(f.left_view, track, t_s, wp, &grown));
+  ASSERT_LT(grown.area(), wp.max_cover_fraction * image.area());
+  ASSERT_TRUE(scanner.scan({track}, t_s, f.left_view, f.right_view, wp, crops, &found, &why,
+                           perception::ScanParts::kWindows));
+  EXPECT_TRUE(found.objects.empty());
+  ASSERT_TRUE(scanner.scan({track}, t_s, f.left_view, f.right_view, wp, crops, &found, &why,
+                           perception::ScanParts::kNew));
+  EXPECT_EQ(found.objects.size(), 1u);
+  EXPECT_EQ(scanner.counts().at("marker_windows_lost"), 2);  // both views, the band's scan
 }
 
 // Corners that do not belong together (the right view's tag elsewhere) fail the reprojection

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "perception/people/people_scan.hpp"
@@ -194,6 +195,21 @@ TEST(People, RealPhotographs) {
   cv::Mat big;
   cv::resize(frame, big, cv::Size(), 2, 2);
   hog.detectMultiScale(big, people, weights, 0, cv::Size(8, 8), cv::Size(), 1.05, 2);
+  // ptz-detect's HOG on two threads of its own finds exactly OpenCV's boxes, with its weights.
+  std::vector<cv::Rect> ours;
+  std::vector<double> our_weights;
+  perception::hogMultiScale(hog, big, cv::Size(8, 8), 1.05, 2, &ours, &our_weights);
+  ASSERT_EQ(ours.size(), people.size());
+  ASSERT_EQ(our_weights.size(), weights.size());
+  const auto sorted = [](std::vector<cv::Rect> r, std::vector<double> w) {
+    std::vector<std::tuple<int, int, int, int, double>> v;
+    for (size_t i = 0; i < r.size(); ++i)
+      v.emplace_back(r[i].x, r[i].y, r[i].width, r[i].height, w[i]);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(sorted(ours, our_weights), sorted(people, weights));
+  EXPECT_GE(people.size(), 4u);
   for (auto& r : people) r = cv::Rect(r.x / 2, r.y / 2, r.width / 2, r.height / 2);
   // Two pairs of walkers, frame 30: each of the four found.
   for (const cv::Point2d walker : {cv::Point2d(390, 227), cv::Point2d(413, 264),

@@ -34,6 +34,20 @@ TrackMeasurement at(const Eigen::Vector3d& p, const std::string& cls = "red_ball
   return m;
 }
 
+// A ball moving at 0.6 m/s along this path.
+Eigen::Vector3d ballPath(double t_s) {
+  return {-0.8 + 0.6 * t_s, 0.1, 3.0};
+}
+
+// The ball and a box seen 10 frames; then the ball hidden 5 frames (coasting), the box seen.
+void ballThenHidden(Tracker* tracker) {
+  int k = 0;
+  for (; k < 10; ++k) {
+    tracker->update(k * kFrameS, {at(ballPath(k * kFrameS)), at({0.5, 0, 2}, "green_box")});
+  }
+  for (; k < 15; ++k) tracker->update(k * kFrameS, {at({0.5, 0, 2}, "green_box")});
+}
+
 Eigen::Vector3d circle(double t_s, double radius_m = 0.6, double speed_m_s = 1.5) {
   const double w = speed_m_s / radius_m;
   return {radius_m * std::cos(w * t_s), 0.2, 2.0 + radius_m * std::sin(w * t_s)};
@@ -282,13 +296,9 @@ TEST(Tracker, BadMeasurementsAndTimeGoingBack) {
 // another frame's are dropped.
 TEST(Tracker, LateMeasurementsOfTheFrameJustUpdated) {
   Tracker tracker;
-  auto truth = [](double t) { return Eigen::Vector3d(-0.8 + 0.6 * t, 0.1, 3.0); };
-  int k = 0;
-  for (; k < 10; ++k) {
-    tracker.update(k * kFrameS, {at(truth(k * kFrameS)), at({0.5, 0, 2}, "green_box")});
-  }
-  // The ball hidden for 5 frames (coasting), the box seen by the frame itself.
-  for (; k < 15; ++k) tracker.update(k * kFrameS, {at({0.5, 0, 2}, "green_box")});
+  ballThenHidden(&tracker);
+  const auto truth = ballPath;
+  int k = 15;
   const double t_s = (k - 1) * kFrameS;
   ASSERT_EQ(tracker.find(1)->state, TrackState::kCoasting);
   tracker.updateLate(
@@ -314,11 +324,57 @@ TEST(Tracker, LateMeasurementsOfTheFrameJustUpdated) {
   }
   EXPECT_EQ(tracker.tracks().size(), 3u);
   EXPECT_EQ(tracker.tracks().back().state, TrackState::kConfirmed);
-  // Of an earlier frame: too late, dropped; no track started.
-  tracker.updateLate(t_s, {at({1, 1, 5}, "green_box", 0.005, -1)});
+  // Of a frame more than late_max_age_s before the newest: too late, dropped; no track started.
+  tracker.updateLate((k - 1) * kFrameS - TrackerParams{}.late_max_age_s - 0.001,
+                     {at({1, 1, 5}, "green_box", 0.005, -1)});
   EXPECT_EQ(tracker.lateDropped(), 1);
+  // Of a frame after the newest (a new run's): dropped.
+  tracker.updateLate(k * kFrameS, {at({1, 1, 5}, "green_box", 0.005, -1)});
+  EXPECT_EQ(tracker.lateDropped(), 2);
   EXPECT_EQ(tracker.lateStarts(), 1);
   EXPECT_EQ(tracker.tracks().size(), 3u);
+}
+
+// A search in the background reports frames after its own: its measurements are moved to the
+// newest frame by their tracks' motion. What was seen since is dropped, a coasting track is found
+// again where it is now, anything else starts a track at its frame's time, predicted to now.
+TEST(Tracker, LateMeasurementsOfAnEarlierFrame) {
+  Tracker tracker;
+  ballThenHidden(&tracker);
+  const auto truth = ballPath;
+  int k = 15;
+  const double now_s = (k - 1) * kFrameS, then_s = (k - 4) * kFrameS;  // 0.1 s before
+  ASSERT_EQ(tracker.find(1)->state, TrackState::kCoasting);
+  tracker.updateLate(
+      then_s, {at(truth(then_s), "red_ball", 0.005, -1), at({0.5, 0, 2}, "green_box", 0.005, -1),
+               at({-0.5, 0.3, 4}, "green_box", 0.005, -1)});
+  EXPECT_EQ(tracker.lateKnown(), 1);    // the box, seen by every frame since
+  EXPECT_EQ(tracker.lateUpdates(), 1);  // the ball
+  EXPECT_EQ(tracker.lateStarts(), 1);   // a second box
+  EXPECT_EQ(tracker.lateDropped(), 0);
+  const Track& ball = *tracker.find(1);
+  EXPECT_EQ(ball.state, TrackState::kConfirmed);
+  EXPECT_EQ(ball.t_s, now_s);
+  // Where the ball is now (6 cm from where it was measured), not where it was.
+  EXPECT_GT((truth(now_s) - truth(then_s)).norm(), 0.05);
+  EXPECT_LT((ball.position() - truth(now_s)).norm(), 0.01);
+  ASSERT_EQ(tracker.tracks().size(), 3u);
+  const Track& fresh = tracker.tracks().back();
+  EXPECT_EQ(fresh.state, TrackState::kTentative);
+  EXPECT_EQ(fresh.first_s, then_s);
+  EXPECT_EQ(fresh.t_s, now_s);
+  EXPECT_EQ(fresh.last_seen_s, now_s);  // the search's delay does not count against its gap
+  EXPECT_LT((fresh.position() - Eigen::Vector3d(-0.5, 0.3, 4)).norm(), 1e-9);
+  // Its speed unknown for 0.1 s: its position's variance grew by about (2 m/s * 0.1 s)^2.
+  const double grown_m2 = fresh.P(0, 0) - (0.005 * 0.005 + 0.003 * 0.003);
+  EXPECT_NEAR(grown_m2, std::pow(TrackerParams{}.initial_speed_sigma_m_s * 0.1, 2), 0.002);
+  // Confirmed by the next frames' own measurements, the same track.
+  for (; k < 18; ++k) {
+    tracker.update(k * kFrameS, {at(truth(k * kFrameS)), at({0.5, 0, 2}, "green_box"),
+                                 at({-0.5, 0.3, 4}, "green_box")});
+  }
+  EXPECT_EQ(tracker.tracks().size(), 3u);
+  EXPECT_EQ(tracker.tracks().back().state, TrackState::kConfirmed);
 }
 
 TEST(Tracker, AnotherClassNeverUpdatesATrack) {
