@@ -88,8 +88,9 @@ class DetectPipeline {
   // track_yaws_accepted, track_yaws_refused, untrusted_<reason>, the windows' (WindowScanner::
   // counts), orientations_estimated, _failed, _skipped, orientation_views_decoded, and every 30
   // frames (boxes) processing_us_p50/_p99 (orientation_us_p50/_p99); discover()'s late_known,
-  // late_updates, late_starts, late_dropped, discoveries_failed and every 30
-  // discovery_us_p50/_p99; the target's colour class's color_<class>_hue_offset_cdeg,
+  // late_updates, late_starts, late_dropped, discoveries_failed, new_object_searches_skipped,
+  // new_objects_too_late, NewObjectSearch::counts() (summed with the windows' scanners') and
+  // every 30 discovery_us_p50/_p99; the target's colour class's color_<class>_hue_offset_cdeg,
   // color_<class>_gate_halfwidth_cdeg and appearance_out_of_range_frames.
   const std::map<std::string, int64_t>& counters() const { return counters_; }
   // Where the target's colour class's appearance, as last seen, leaves its configured range
