@@ -12,22 +12,22 @@
 namespace ptz::perception {
 namespace {
 
+// The colour classes' names (the ones the colour windows go around).
+std::vector<std::string> colourClassNames(const DetectorParams& dp) {
+  std::vector<std::string> names;
+  for (const auto& c : dp.classes) names.push_back(c.name);
+  return names;
+}
+
 // The colour classes, every tagged object's name, the faces' and people's classes (TARGET_SELECT
 // may name any).
 std::vector<std::string> classNames(const DetectorParams& dp,
                                     const std::vector<MarkerClass>& markers,
                                     const std::vector<PeopleClass>& people) {
-  std::vector<std::string> names;
-  for (const auto& c : dp.classes) names.push_back(c.name);
+  std::vector<std::string> names = colourClassNames(dp);
   for (const auto& n : markerObjectNames(markers)) names.push_back(n);
   for (const auto& c : people) names.push_back(c.name);
   names.push_back(ClickedTracker::kClassName);
-  return names;
-}
-
-std::vector<std::string> colourClassNames(const DetectorParams& dp) {
-  std::vector<std::string> names;
-  for (const auto& c : dp.classes) names.push_back(c.name);
   return names;
 }
 
