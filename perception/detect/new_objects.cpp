@@ -174,6 +174,21 @@ void NewObjectSearch::loop() {
   }
 }
 
+void NewObjectSearch::failed(const char* what, NewObjectsFound* out) noexcept {
+  // OpenCV's or libapriltag's refusal of this frame's parts, or memory: it finds nothing, the
+  // process goes on (on its own thread an exception would end it), and says so (the caller's
+  // discoveries_failed and stderr, with this).
+  out->found.clear();
+  out->ok = false;
+  try {
+    out->why = std::string("the search threw: ") + what;
+    ++errors_["new_object_errors"];
+    std::lock_guard<std::mutex> lock(mutex_);
+    scanner_counts_["new_object_errors"] = errors_["new_object_errors"];
+  } catch (...) {
+  }
+}
+
 NewObjectsFound NewObjectSearch::search() {
   const auto t0 = std::chrono::steady_clock::now();
   NewObjectsFound out;
@@ -224,16 +239,10 @@ NewObjectsFound NewObjectSearch::search() {
     std::lock_guard<std::mutex> lock(mutex_);
     if (background_) counts["new_objects_thread_nice"] = thread_nice_;
     scanner_counts_ = std::move(counts);
+  } catch (const std::exception& e) {
+    failed(e.what(), &out);
   } catch (...) {
-    // OpenCV's or libapriltag's refusal of this frame's parts, or memory: it finds nothing, the
-    // process goes on (on its own thread an exception would end it).
-    try {
-      ++errors_["new_object_errors"];
-      std::lock_guard<std::mutex> lock(mutex_);
-      scanner_counts_["new_object_errors"] = errors_["new_object_errors"];
-    } catch (...) {
-    }
-    out.found.clear();
+    failed("an exception of no known type", &out);
   }
   return out;
 }

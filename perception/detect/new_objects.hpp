@@ -76,7 +76,7 @@ class NewObjectSearch {
   std::optional<NewObjectsFound> collect(bool wait);
   // The scanners' counts and errors as of the last search collected: bands_scanned,
   // band_windows_cut, marker_*, people_*, new_object_errors (an exception of OpenCV's or
-  // libapriltag's: the search's frame found nothing),
+  // libapriltag's: the search's frame found nothing, and its result says why),
   // new_objects_thread_nice (the thread's nice value; -100: it could not be lowered, see
   // threadProblem()).
   const std::map<std::string, int64_t>& counts() const { return counts_; }
@@ -86,6 +86,8 @@ class NewObjectSearch {
  private:
   void loop();
   NewObjectsFound search();  // the job's, in the thread that runs it
+  // An exception ended a search: *out found nothing, failed, counted new_object_errors.
+  void failed(const char* what, NewObjectsFound* out) noexcept;
 
   DetectConfig config_;
   std::vector<std::string> class_names_;
