@@ -12,4 +12,12 @@ if ! unshare -n -p -f --mount-proc true 2>/dev/null; then
   fi
   exit 77
 fi
-exec unshare -n -p -f --mount-proc sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$@"' sh "$@"
+# The kernel picks a socket's own port (an LCM sender's, a driver's VISCA socket) from the
+# namespace's ephemeral range; the tests' servers listen on fixed ports below 61000 (VISCA 5239x,
+# ONVIF 180xx), so that range is moved above them: otherwise a sender can hold a port before the
+# server that the test gives it starts (CI once saw "cannot bind UDP 127.0.0.1:52394").
+exec unshare -n -p -f --mount-proc sh -c '
+  ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo || exit 1
+  echo "61000 65535" 2>/dev/null >/proc/sys/net/ipv4/ip_local_port_range ||
+    echo "run_in_netns: cannot move the ephemeral ports above 61000; a fixed port may be taken" >&2
+  exec "$@"' sh "$@"

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 #include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_setpoint_t.hpp"
@@ -14,6 +15,16 @@
 using namespace std::chrono_literals;
 using ptz::test::ChildProcess;
 using ptz::test::kConfig;
+
+// The cameras' fixed ports in these tests (5239x here, 180xx in the ONVIF loop's) are below the
+// namespace's ephemeral range, so no sender's own port can take one before its server binds it.
+TEST(ViscaLoop, TheTestsFixedPortsAreBelowTheEphemeralRange) {
+  std::ifstream range("/proc/sys/net/ipv4/ip_local_port_range");
+  int first = 0, last = 0;
+  ASSERT_TRUE(range >> first >> last);
+  EXPECT_GT(first, 52398) << "run_in_netns.sh moves the ephemeral ports above the tests' ports";
+  EXPECT_GE(last, first);
+}
 
 TEST(ViscaLoop, TracksTheFigureEightThroughViscaOverIp) {
   lcm::LCM lcm(ptz::test::kTestUrl);
