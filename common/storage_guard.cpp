@@ -1,6 +1,8 @@
 #include "common/storage_guard.hpp"
 
 #include <fstream>
+#include <set>
+#include <stdexcept>
 
 namespace ptz {
 
@@ -53,16 +55,31 @@ std::string yamlTextProblem(const std::string& path) {
   return yaml ? "" : "empty (not YAML: no %YAML:1.0 first)";
 }
 
-void readEveryNode(const cv::FileNode& node) {
-  if (node.isMap() || node.isSeq()) {
-    const bool map = node.isMap();
+namespace {
+
+void readEveryNodeAt(const cv::FileNode& node, const std::string& path) {
+  if (node.isMap()) {
+    std::set<std::string> keys;
     for (const auto& child : node) {
-      if (map) (void)child.name();
-      readEveryNode(child);
+      const std::string key = child.name();
+      const std::string child_path = path.empty() ? key : path + "." + key;
+      if (!keys.insert(key).second) {
+        throw std::runtime_error(child_path + ": given twice; a map's keys are unique");
+      }
+      readEveryNodeAt(child, child_path);
     }
+  } else if (node.isSeq()) {
+    size_t i = 0;
+    for (const auto& child : node) readEveryNodeAt(child, path + "[" + std::to_string(i++) + "]");
   } else if (node.isString()) {
     (void)node.string();
   }
+}
+
+}  // namespace
+
+void readEveryNode(const cv::FileNode& node) {
+  readEveryNodeAt(node, "");
 }
 
 }  // namespace ptz

@@ -20,7 +20,9 @@ namespace ptz {
 std::string yamlTextProblem(const std::string& path);
 
 // Reads every key and every text of the tree once: the parser can leave a node whose name or text
-// is broken and throws (cv::Exception, std::length_error) only when it is read.
+// is broken and throws (cv::Exception, std::length_error) only when it is read. A key given twice
+// in one map throws std::runtime_error naming its path ("left.zoom: given twice ..."): OpenCV
+// keeps both and a lookup finds the first, so a value added below an old one would be ignored.
 void readEveryNode(const cv::FileNode& node);
 
 }  // namespace ptz

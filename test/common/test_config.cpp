@@ -162,6 +162,36 @@ TEST(StructuredFiles, UnknownFieldsAndValuesOutOfRangeAreNamedWithTheirPath) {
   EXPECT_EQ(ptz::fieldPath("rig file 'r.yaml'", "image_width"), "rig file 'r.yaml', image_width");
 }
 
+// OpenCV keeps both of a repeated key and a lookup finds the first: a value added below an old one
+// would be silently ignored, so every file read through openForRead refuses it, by its path.
+TEST(StructuredFiles, AKeyGivenTwiceInOneMapIsRefusedWithItsPath) {
+  ptz::Params p = makeParams();
+  const std::string top = writeTemp("twice.yaml", "%YAML:1.0\n---\nrate_hz: 30\nrate_hz: 60\n");
+  EXPECT_EQ(parseError(p, {"prog", "--config", top}),
+            "config file '" + top + "': malformed (rate_hz: given twice; a map's keys are unique)");
+  const std::string nested =
+      writeTemp("twice_nested.yaml",
+                "%YAML:1.0\n---\nobjects:\n  - { name: a }\n  - { name: b, radius_m: 1, "
+                "radius_m: 2 }\n");
+  auto openError = [](const std::string& path) {
+    try {
+      ptz::openForRead(path, "scene file");
+    } catch (const ptz::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(openError(nested), "scene file '" + nested +
+                                   "': malformed (objects[1].radius_m: given twice; a map's keys "
+                                   "are unique)");
+  // The same key in two maps, or twice in a list, is no repetition.
+  const std::string fine =
+      writeTemp("twice_fine.yaml",
+                "%YAML:1.0\n---\nleft: { zoom: 1 }\nright:\n  zoom: 1\nlist: [1, 1]\nobjects:\n"
+                "  - { name: a }\n  - { name: a }\n");
+  EXPECT_EQ(openError(fine), "");
+}
+
 // A file named in a config file is found from the config file's folder, wherever the program
 // runs; from a flag, from the current directory; absolute paths stay. A missing one is named
 // with the config file, the parameter, its value and the resolved path.
