@@ -10,7 +10,7 @@
 
 #include "common/plant.hpp"
 #include "common/rig.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 #include "sim/scene/scene.hpp"
 
 namespace ptz::sim {

@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 
 #include <array>
+#include <tuple>
 #include <vector>
 
 #include "common/rig.hpp"
@@ -107,6 +108,10 @@ class Renderer {
                                     const CameraView& view, int u, int v,
                                     const Eigen::Vector3d& p_box, const Eigen::Vector3d& inward,
                                     double t);
+  // Row v of what an object draws: bgr's pixels, depth_ and owner_.
+  std::tuple<cv::Vec3b*, float*, int32_t*> objectRow(cv::Mat* bgr, int v) {
+    return {bgr->ptr<cv::Vec3b>(v), depth_.ptr<float>(v), owner_.ptr<int32_t>(v)};
+  }
   // A person's pixels in rows [row0, row1) (as drawObject).
   int64_t drawPerson(const SceneObject& object, const ObjectFrame& frame, int32_t index,
                      const CameraView& view, const RayRows& rays, int v0, int v1, cv::Mat* bgr);

@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "common/config.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 #include "sim/simulator.hpp"
 #include "support/sim/scene_text.hpp"
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 #include "sim/simulator.hpp"
 
 using ptz::PtzPose;

@@ -9,7 +9,7 @@
 
 #include "common/rig.hpp"
 #include "perception/calibrate/calibration.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 
 namespace ptz::test {
 

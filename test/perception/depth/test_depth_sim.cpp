@@ -16,7 +16,7 @@
 
 #include "perception/depth/cloud.hpp"
 #include "perception/depth/depth.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 
 using ptz::PtzPose;
 using ptz::Side;

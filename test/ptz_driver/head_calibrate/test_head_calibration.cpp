@@ -16,7 +16,7 @@
 #include "ptz_driver/head_calibrate/view_fit.hpp"
 #include "ptz_driver/heads/onvif/head/onvif_model.hpp"
 #include "ptz_driver/heads/visca/visca_model.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 #include "support/focal_length_error.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 
 #include "ptzstereo/process_status_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 
 namespace ptz::test {
 

@@ -20,7 +20,7 @@
 #include "common/transport/transport.hpp"
 #include "ptzstereo/ptz_state_t.hpp"
 #include "ptzstereo/stereo_frame_t.hpp"
-#include "sim/renderer.hpp"
+#include "sim/render/renderer.hpp"
 #include "support/child_process.hpp"
 #include "support/hardware/camera_recording.hpp"
 #include "support/lcm_wait.hpp"
