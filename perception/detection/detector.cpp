@@ -437,7 +437,7 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
     // Suzuki-Abe border following (the paper's chain-code contours), outer borders only.
     cv::findContours(m(roi).clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, roi.tl());
     const size_t first = regions.size();
-    int splits = 0;
+    int splits = 0, hue_splits = 0;
     for (const auto& contour : contours) {
       const cv::Rect bbox = cv::boundingRect(contour);
       if (window) {
@@ -448,29 +448,14 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
           continue;
         }
       }
-      // Moments of the region's pixels (not of the polygon), alone in its box: the centre of
-      // gravity of exactly this region.
-      cv::Mat alone(bbox.size(), CV_8U, cv::Scalar(0));
-      cv::drawContours(alone, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
-                       cv::FILLED, cv::LINE_8, cv::noArray(), INT_MAX, -bbox.tl());
-      const cv::Moments mo = cv::moments(alone & m(bbox), true);
-      if (mo.m00 < c.min_area_px2 * limits.min_area_factor ||
-          mo.m00 > c.max_area_px2 * limits.max_area_factor) {
+      Region r;
+      cv::Mat alone;
+      cv::Moments mo;
+      if (!contourRegion(contour, m, cv::Point(0, 0), ci, offset, limits, &r, &alone, &mo)) {
         continue;
       }
-      Region r;
-      r.class_index = static_cast<int>(ci);
-      r.area_px2 = mo.m00;
-      // bbox.x + offset first, as an int: the same double as a full scan's.
-      r.centroid_px = {(bbox.x + offset.x) + mo.m10 / mo.m00,
-                       (bbox.y + offset.y) + mo.m01 / mo.m00};
-      r.bbox = bbox + offset;
       if (limits.shape && c.shape != "any") {
-        const ShapeScore score = huShape(mo, templates_[ci]);
-        r.shape_distance = score.distance;
-        r.elongation = score.elongation;
-        const bool shape_ok =
-            r.shape_distance <= c.max_shape_distance && r.elongation <= c.max_elongation;
+        const bool shape_ok = shapeOk(mo, ci, &r);
         // Balls of the class overlapping: each a disc of the blob; one ball with a sliver of
         // another behind it (which the shape test lets through) is its disc alone. Not for a
         // round blob too small to hold two balls; at most kMaxSplitsPerScan blobs a class per
@@ -479,22 +464,141 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
             splits < kMaxSplitsPerScan) {
           ++splits;
           double covered = 1;
-          std::vector<Region> discs = splitBlob(contour, alone & m(bbox), r, c, &covered);
+          std::vector<Region> discs = splitBlob(contour, alone, r, c, &covered);
           if (discs.size() >= 2 || (discs.size() == 1 && covered < kOneBallCovered)) {
             regions.insert(regions.end(), discs.begin(), discs.end());
             continue;
           }
         }
+        // Two objects of the class's window but of hues apart (a ball before a poster of a near
+        // hue, before any hue is learnt): each on its own.
+        if (!shape_ok && hue_splits < kMaxSplitsPerScan && !greyInClass(c)) {
+          ++hue_splits;
+          const std::vector<Region> parts =
+              splitByHue(filtered, labels, alone, bbox, ci, offset, limits);
+          regions.insert(regions.end(), parts.begin(), parts.end());
+          continue;
+        }
         if (!shape_ok) continue;
       }
-      // Its pixels of the class's colour (not those the closing filled in).
-      cv::Mat coloured;
-      cv::bitwise_and(labels(bbox), cv::Scalar(1 << ci), coloured);
-      r.colour = measureColour(filtered(bbox), (alone & m(bbox)) & (coloured > 0), ci);
+      r.colour = colourOf(filtered, labels, alone, bbox, ci);
       regions.push_back(r);
     }
     std::sort(regions.begin() + static_cast<ptrdiff_t>(first), regions.end(),
               [](const Region& a, const Region& b) { return a.area_px2 > b.area_px2; });
+  }
+  return regions;
+}
+
+bool Detector::contourRegion(const std::vector<cv::Point>& contour, const cv::Mat& mask,
+                             const cv::Point& mask_origin, size_t ci, const cv::Point& offset,
+                             const Limits& limits, Region* r, cv::Mat* alone,
+                             cv::Moments* mo) const {
+  const ColorClass& c = params_.classes[ci];
+  const cv::Rect bbox = cv::boundingRect(contour);
+  // Moments of the region's pixels (not of the polygon), alone in its box: the centre of gravity
+  // of exactly this region.
+  cv::Mat filled(bbox.size(), CV_8U, cv::Scalar(0));
+  cv::drawContours(filled, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
+                   cv::FILLED, cv::LINE_8, cv::noArray(), INT_MAX, -bbox.tl());
+  *alone = filled & mask(bbox - mask_origin);
+  *mo = cv::moments(*alone, true);
+  if (mo->m00 < c.min_area_px2 * limits.min_area_factor ||
+      mo->m00 > c.max_area_px2 * limits.max_area_factor) {
+    return false;
+  }
+  r->class_index = static_cast<int>(ci);
+  r->area_px2 = mo->m00;
+  // bbox.x + offset first, as an int: the same double as a full scan's.
+  r->centroid_px = {(bbox.x + offset.x) + mo->m10 / mo->m00,
+                    (bbox.y + offset.y) + mo->m01 / mo->m00};
+  r->bbox = bbox + offset;
+  return true;
+}
+
+bool Detector::shapeOk(const cv::Moments& mo, size_t ci, Region* r) const {
+  const ColorClass& c = params_.classes[ci];
+  const ShapeScore score = huShape(mo, templates_[ci]);
+  r->shape_distance = score.distance;
+  r->elongation = score.elongation;
+  return r->shape_distance <= c.max_shape_distance && r->elongation <= c.max_elongation;
+}
+
+RegionColour Detector::colourOf(const cv::Mat& filtered, const cv::Mat& labels,
+                                const cv::Mat& alone, const cv::Rect& bbox, size_t ci) const {
+  // Its pixels of the class's colour (not those the closing filled in).
+  cv::Mat coloured;
+  cv::bitwise_and(labels(bbox), cv::Scalar(1 << ci), coloured);
+  return measureColour(filtered(bbox), alone & (coloured > 0), ci);
+}
+
+std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat& labels,
+                                         const cv::Mat& blob, const cv::Rect& bbox, size_t ci,
+                                         const cv::Point& offset, const Limits& limits) const {
+  const ColorClass& c = params_.classes[ci];
+  const auto bit = static_cast<uint8_t>(1u << ci);
+  // Its pixels of the class's colour: their hues' offsets from the class's hue centre, scaled to
+  // 0..255 over the class's window (Otsu's threshold is OpenCV's, on 8 bits), in `levels` (-1:
+  // not one of them) and in `values`, one after the other.
+  double width_deg = std::fmod(c.hue_max_deg - c.hue_min_deg + 360.0, 360.0);
+  if (width_deg <= 0) width_deg = 360;
+  const double levels_per_deg = 255 / width_deg;
+  cv::Mat levels(bbox.size(), CV_16S, cv::Scalar(-1));
+  std::vector<uchar> values;
+  values.reserve(static_cast<size_t>(cv::countNonZero(blob)));
+  for (int y = 0; y < bbox.height; ++y) {
+    const uchar* in = filtered.ptr<uchar>(bbox.y + y) + 3 * bbox.x;
+    const uchar* l = labels.ptr<uchar>(bbox.y + y) + bbox.x;
+    const uchar* b = blob.ptr<uchar>(y);
+    int16_t* out = levels.ptr<int16_t>(y);
+    for (int x = 0; x < bbox.width; ++x) {
+      const uchar bl = in[3 * x], gr = in[3 * x + 1], rd = in[3 * x + 2];
+      if (!b[x] || !(l[x] & bit) || (bl == gr && gr == rd)) continue;
+      const double offset_deg = hueDifferenceDeg(hueDegOf(bl, gr, rd), hue_centre_deg_[ci]);
+      const uchar level = cv::saturate_cast<uchar>((offset_deg + width_deg / 2) * levels_per_deg);
+      out[x] = level;
+      values.push_back(level);
+    }
+  }
+  // Whether they are two groups: each large enough to be an object, their means kMinHueGapDeg
+  // and kMinHueSeparation pooled deviations apart.
+  const double min_pixels = c.min_area_px2 * limits.min_area_factor;
+  if (values.size() < 2 * min_pixels || values.empty()) return {};
+  const cv::Mat all(1, static_cast<int>(values.size()), CV_8U, values.data());
+  cv::Mat upper_values;
+  const double threshold =
+      cv::threshold(all, upper_values, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  const int upper_count = cv::countNonZero(upper_values);
+  if (upper_count < min_pixels || static_cast<double>(values.size()) - upper_count < min_pixels) {
+    return {};
+  }
+  cv::Scalar lower_mean, lower_sd, upper_mean, upper_sd;
+  cv::meanStdDev(all, lower_mean, lower_sd, upper_values == 0);
+  cv::meanStdDev(all, upper_mean, upper_sd, upper_values);
+  const double gap_deg = (upper_mean[0] - lower_mean[0]) / levels_per_deg;
+  const double pooled_deg =
+      std::sqrt((lower_sd[0] * lower_sd[0] + upper_sd[0] * upper_sd[0]) / 2) / levels_per_deg;
+  if (gap_deg < kMinHueGapDeg || gap_deg < kMinHueSeparation * pooled_deg) return {};
+  std::vector<Region> regions;
+  for (const bool upper : {false, true}) {
+    cv::Mat side = upper ? levels > threshold : (levels >= 0) & (levels <= threshold);
+    // The class's clean-up, as its mask had: the rim's pixels of blended hues go to either side.
+    cv::morphologyEx(side, side, cv::MORPH_OPEN, kernel_);
+    cv::morphologyEx(side, side, cv::MORPH_CLOSE, kernel_);
+    side &= blob;
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(side.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, bbox.tl());
+    for (const auto& contour : contours) {
+      Region r;
+      cv::Mat alone;
+      cv::Moments mo;
+      if (!contourRegion(contour, side, bbox.tl(), ci, offset, limits, &r, &alone, &mo) ||
+          !shapeOk(mo, ci, &r)) {
+        continue;
+      }
+      r.colour = colourOf(filtered, labels, alone, cv::boundingRect(contour), ci);
+      regions.push_back(r);
+    }
   }
   return regions;
 }

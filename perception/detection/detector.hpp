@@ -131,6 +131,27 @@ class Detector {
                                const cv::Rect* interior, bool* cut, const Limits& limits) const;
   // The class's mask; *roi: the part of it that holds the class's pixels (empty: none).
   cv::Mat maskFromLabels(const cv::Mat& labels, size_t index, cv::Rect* roi) const;
+  // The region of class ci of one outer contour (in the scanned part) of `mask` (whose top-left
+  // pixel is mask_origin in the part): *alone, mask's pixels inside the contour in its box, and
+  // their moments. False when their area is outside the class's limits.
+  bool contourRegion(const std::vector<cv::Point>& contour, const cv::Mat& mask,
+                     const cv::Point& mask_origin, size_t ci, const cv::Point& offset,
+                     const Limits& limits, Region* r, cv::Mat* alone, cv::Moments* mo) const;
+  // The shape test of class ci on a region's moments; sets its shape distance and elongation.
+  bool shapeOk(const cv::Moments& mo, size_t ci, Region* r) const;
+  // The colour of a region's pixels of its class (alone: its pixels in bbox, in the part).
+  RegionColour colourOf(const cv::Mat& filtered, const cv::Mat& labels, const cv::Mat& alone,
+                        const cv::Rect& bbox, size_t ci) const;
+  // A blob of class ci (blob: its pixels in bbox) that failed the shape test, split at Otsu's
+  // threshold (OpenCV's) of its pixels' hues when they make two groups (kMinHueGapDeg and
+  // kMinHueSeparation pooled deviations apart, each an object's area): the regions of each side
+  // that pass the area and shape tests. A ball before a poster of a near hue inside the class's
+  // window, found before the colour model has learnt its hue (a gate then keeps it apart).
+  std::vector<Region> splitByHue(const cv::Mat& filtered, const cv::Mat& labels,
+                                 const cv::Mat& blob, const cv::Rect& bbox, size_t ci,
+                                 const cv::Point& offset, const Limits& limits) const;
+  static constexpr double kMinHueGapDeg = 5;
+  static constexpr double kMinHueSeparation = 3;
 
   DetectorParams params_;
   std::vector<cv::Moments> templates_;

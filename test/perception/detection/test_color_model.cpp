@@ -130,8 +130,9 @@ TEST(ColorModel, TheRegionsColourIsMeasured) {
   EXPECT_NEAR(r->colour.intensity, 90, 1e-9);
 }
 
-// A red ball in front of a red-orange poster (hue 15.6 deg, inside the red window): one blob, not
-// a ball. Gated to the ball's hue, the ball alone.
+// A red ball in front of a red-orange poster (hue 15.6 deg, inside the red window): one blob of
+// the red class, not a ball. Before any hue is learnt the blob's hues are two groups, so it is
+// split at their threshold: the ball on its own. Gated to the ball's hue, the ball alone.
 TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
   const cv::Vec3b poster(30, 80, 210);
   const cv::Point2d centre(170.3, 120.6);
@@ -140,14 +141,19 @@ TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
   perception::DetectorParams params = defaultClasses();
   params.classes[0].max_area_px2 = 1e6;
   const perception::Detector plain(params);
-  bool ball_found = false;
-  for (const auto& r : plain.detect(img)) {
-    if (r.class_index == 0 &&
-        std::hypot(r.centroid_px.x - centre.x, r.centroid_px.y - centre.y) < 0.5) {
-      ball_found = true;
-    }
-  }
-  EXPECT_FALSE(ball_found) << "without a gate the ball should merge with the poster";
+  // The blob the ball and the poster make fails the circle: only the split finds the ball.
+  const cv::Mat blob = plain.mask(img, 0);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(blob.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  ASSERT_EQ(contours.size(), 1u) << "the ball and the poster are one blob of the class";
+  EXPECT_GT(cv::contourArea(contours[0]), 140.0 * 120 * 0.95);
+  const std::optional<perception::Region> split = onlyRed(plain.detect(img));
+  ASSERT_TRUE(split) << "the ball alone: the poster's side is no circle";
+  EXPECT_NEAR(split->centroid_px.x, centre.x, 0.5);
+  EXPECT_NEAR(split->centroid_px.y, centre.y, 0.5);
+  EXPECT_GT(split->area_px2, M_PI * (radius - 1) * (radius - 1));
+  EXPECT_LT(split->area_px2, M_PI * (radius + 1) * (radius + 1));
+  EXPECT_NEAR(split->colour.hue_offset_deg, 0, 1.5) << "the ball's own hue, not the poster's";
 
   // The model learns the ball's hue from regions of it alone (its confirmed track's).
   const cv::Mat alone = ballOnPoster(cv::Vec3b(120, 125, 130), centre, radius);
@@ -176,6 +182,29 @@ TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
   EXPECT_LT(ball->area_px2, M_PI * (radius + 0.75) * (radius + 0.75));
   // Forgotten after follow_forget_s without a confirmed region: the class's window again.
   EXPECT_FALSE(model.gate(t + params.adapt.follow_forget_s + 0.01, params.adapt).active);
+}
+
+// The split by hue takes only what is two groups of hues, each an object: a ball before a poster
+// of its own hue, or of a hue too near, stays one blob (no ball); on a grey wall a ball needs none.
+TEST(ColorModel, ABlobIsSplitByHueOnlyWhenItsHuesAreTwoGroups) {
+  const cv::Point2d centre(170.3, 120.6);
+  perception::DetectorParams params = defaultClasses();
+  params.classes[0].max_area_px2 = 1e6;
+  const perception::Detector detector(params);
+  auto ballFound = [&](const cv::Vec3b& poster) {
+    for (const auto& r : detector.detect(ballOnPoster(poster, centre, 18))) {
+      if (r.class_index == 0 &&
+          std::hypot(r.centroid_px.x - centre.x, r.centroid_px.y - centre.y) < 1) {
+        return true;
+      }
+    }
+    return false;
+  };
+  EXPECT_FALSE(ballFound(kRed)) << "the same hue: nothing to split";
+  // (30, 38, 210): hue 2.3 deg from the ball's, under kMinHueGapDeg.
+  EXPECT_FALSE(ballFound(cv::Vec3b(30, 38, 210))) << "hues too near to be told apart";
+  EXPECT_TRUE(ballFound(cv::Vec3b(30, 80, 210)));  // 15.6 deg: two groups
+  EXPECT_TRUE(ballFound(cv::Vec3b(120, 125, 130))) << "a grey wall: the ball alone";
 }
 
 TEST(ColorModel, LearnsAtItsRateAndForgets) {
