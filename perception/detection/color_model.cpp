@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <opencv2/imgproc.hpp>
+
 #include "perception/detection/detector.hpp"
 
 namespace ptz::perception {
@@ -104,6 +106,44 @@ std::string ColorModel::outOfRange(const ColorClass& c, const ColorAdaptParams& 
     return text;
   }
   return "";
+}
+
+HueGroups twoHueGroups(const std::vector<uint8_t>& levels, double levels_per_deg,
+                       double min_pixels) {
+  HueGroups g;
+  const double least = std::max(1.0, min_pixels);
+  if (static_cast<double>(levels.size()) < 2 * least) return g;
+  const cv::Mat all(1, static_cast<int>(levels.size()), CV_8U, const_cast<uint8_t*>(levels.data()));
+  cv::Mat upper;
+  g.threshold = cv::threshold(all, upper, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
+  const int upper_count = cv::countNonZero(upper);
+  if (upper_count < least || static_cast<double>(levels.size()) - upper_count < least) return g;
+  cv::Scalar lower_mean, lower_sd, upper_mean, upper_sd;
+  cv::meanStdDev(all, lower_mean, lower_sd, upper == 0);
+  cv::meanStdDev(all, upper_mean, upper_sd, upper);
+  g.gap_deg = (upper_mean[0] - lower_mean[0]) / levels_per_deg;
+  g.pooled_sigma_deg =
+      std::sqrt((lower_sd[0] * lower_sd[0] + upper_sd[0] * upper_sd[0]) / 2) / levels_per_deg;
+  // The histogram, each bin the mean of a degree's bins around it (the noise of few pixels a bin).
+  std::vector<double> histogram(256, 0), smooth(256, 0);
+  for (const uint8_t v : levels) histogram[v] += 1;
+  const int half = std::max(0, static_cast<int>(std::lround(levels_per_deg / 2)));
+  for (int i = 0; i < 256; ++i) {
+    const int lo = std::max(0, i - half), hi = std::min(255, i + half);
+    for (int k = lo; k <= hi; ++k) smooth[i] += histogram[k];
+    smooth[i] /= hi - lo + 1;
+  }
+  const int t = static_cast<int>(g.threshold);
+  const double lower_peak = *std::max_element(smooth.begin(), smooth.begin() + t + 1);
+  const double upper_peak = *std::max_element(smooth.begin() + t + 1, smooth.end());
+  const auto from = static_cast<ptrdiff_t>(std::lround(lower_mean[0]));
+  const auto to = static_cast<ptrdiff_t>(std::lround(upper_mean[0]));
+  const double valley = *std::min_element(smooth.begin() + from, smooth.begin() + to + 1);
+  g.valley_fraction = valley / std::min(lower_peak, upper_peak);
+  g.two = g.gap_deg >= HueGroups::kMinGapDeg &&
+          g.gap_deg >= HueGroups::kMinSeparation * g.pooled_sigma_deg &&
+          g.valley_fraction <= HueGroups::kMaxValleyFraction;
+  return g;
 }
 
 }  // namespace ptz::perception

@@ -6,7 +6,9 @@
 // with it. And what a class's appearance does against its configured range, for the status.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace ptz::perception {
 
@@ -83,5 +85,21 @@ double hueWindowCentreDeg(double hue_min_deg, double hue_max_deg);
 double hueWindowHalfwidthDeg(double hue_min_deg, double hue_max_deg);
 // a - b wrapped to (-180, 180].
 double hueDifferenceDeg(double a_deg, double b_deg);
+
+// Whether pixels' hues (as 8-bit levels, levels_per_deg to a degree) are two groups, two objects
+// of near hues rather than one: split at Otsu's threshold, each side at least min_pixels, their
+// means kMinGapDeg and kMinSeparation pooled deviations apart, and the histogram between the means
+// dipping below kMaxValleyFraction of the smaller side's peak (an even spread, one shaded object,
+// has no such valley). The upper group is the levels above `threshold`.
+struct HueGroups {
+  static constexpr double kMinGapDeg = 5;
+  static constexpr double kMinSeparation = 4;
+  static constexpr double kMaxValleyFraction = 0.5;
+  bool two = false;
+  double threshold = 0;
+  double gap_deg = 0, pooled_sigma_deg = 0, valley_fraction = 1;
+};
+HueGroups twoHueGroups(const std::vector<uint8_t>& levels, double levels_per_deg,
+                       double min_pixels);
 
 }  // namespace ptz::perception

@@ -472,7 +472,11 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
         }
         // Two objects of the class's window but of hues apart (a ball before a poster of a near
         // hue, before any hue is learnt): each on its own.
-        if (!shape_ok && hue_splits < kMaxSplitsPerScan && !greyInClass(c)) {
+        // Only a blob that can hold two objects, filling a quarter of its box at least: all the
+        // splits of a scan then touch at most four times the part's pixels.
+        if (!shape_ok && hue_splits < kMaxSplitsPerScan && !greyInClass(c) &&
+            mo.m00 >= 2 * c.min_area_px2 * limits.min_area_factor &&
+            bbox.area() <= kMaxHueSplitBoxPerPixel * mo.m00) {
           ++hue_splits;
           const std::vector<Region> parts =
               splitByHue(filtered, labels, alone, bbox, ci, offset, limits);
@@ -544,7 +548,7 @@ std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat&
   if (width_deg <= 0) width_deg = 360;
   const double levels_per_deg = 255 / width_deg;
   cv::Mat levels(bbox.size(), CV_16S, cv::Scalar(-1));
-  std::vector<uchar> values;
+  std::vector<uint8_t> values;
   values.reserve(static_cast<size_t>(cv::countNonZero(blob)));
   for (int y = 0; y < bbox.height; ++y) {
     const uchar* in = filtered.ptr<uchar>(bbox.y + y) + 3 * bbox.x;
@@ -560,30 +564,16 @@ std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat&
       values.push_back(level);
     }
   }
-  // Whether they are two groups: each large enough to be an object, their means kMinHueGapDeg
-  // and kMinHueSeparation pooled deviations apart.
-  const double min_pixels = c.min_area_px2 * limits.min_area_factor;
-  if (values.size() < 2 * min_pixels || values.empty()) return {};
-  const cv::Mat all(1, static_cast<int>(values.size()), CV_8U, values.data());
-  cv::Mat upper_values;
-  const double threshold =
-      cv::threshold(all, upper_values, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
-  const int upper_count = cv::countNonZero(upper_values);
-  if (upper_count < min_pixels || static_cast<double>(values.size()) - upper_count < min_pixels) {
-    return {};
-  }
-  cv::Scalar lower_mean, lower_sd, upper_mean, upper_sd;
-  cv::meanStdDev(all, lower_mean, lower_sd, upper_values == 0);
-  cv::meanStdDev(all, upper_mean, upper_sd, upper_values);
-  const double gap_deg = (upper_mean[0] - lower_mean[0]) / levels_per_deg;
-  const double pooled_deg =
-      std::sqrt((lower_sd[0] * lower_sd[0] + upper_sd[0] * upper_sd[0]) / 2) / levels_per_deg;
-  if (gap_deg < kMinHueGapDeg || gap_deg < kMinHueSeparation * pooled_deg) return {};
+  const HueGroups groups =
+      twoHueGroups(values, levels_per_deg, c.min_area_px2 * limits.min_area_factor);
+  if (!groups.two) return {};
   std::vector<Region> regions;
   for (const bool upper : {false, true}) {
-    cv::Mat side = upper ? levels > threshold : (levels >= 0) & (levels <= threshold);
+    const cv::Mat hues =
+        upper ? levels > groups.threshold : (levels >= 0) & (levels <= groups.threshold);
     // The class's clean-up, as its mask had: the rim's pixels of blended hues go to either side.
-    cv::morphologyEx(side, side, cv::MORPH_OPEN, kernel_);
+    cv::Mat side;
+    cv::morphologyEx(hues, side, cv::MORPH_OPEN, kernel_);
     cv::morphologyEx(side, side, cv::MORPH_CLOSE, kernel_);
     side &= blob;
     std::vector<std::vector<cv::Point>> contours;
@@ -596,7 +586,9 @@ std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat&
           !shapeOk(mo, ci, &r)) {
         continue;
       }
-      r.colour = colourOf(filtered, labels, alone, cv::boundingRect(contour), ci);
+      // Its colour from its own side's hues only (not the other's that the closing took in).
+      const cv::Rect box = cv::boundingRect(contour);
+      r.colour = colourOf(filtered, labels, alone & hues(box - bbox.tl()), box, ci);
       regions.push_back(r);
     }
   }

@@ -143,15 +143,14 @@ class Detector {
   RegionColour colourOf(const cv::Mat& filtered, const cv::Mat& labels, const cv::Mat& alone,
                         const cv::Rect& bbox, size_t ci) const;
   // A blob of class ci (blob: its pixels in bbox) that failed the shape test, split at Otsu's
-  // threshold (OpenCV's) of its pixels' hues when they make two groups (kMinHueGapDeg and
-  // kMinHueSeparation pooled deviations apart, each an object's area): the regions of each side
-  // that pass the area and shape tests. A ball before a poster of a near hue inside the class's
-  // window, found before the colour model has learnt its hue (a gate then keeps it apart).
+  // threshold (OpenCV's) of its pixels' hues when they make two groups (twoHueGroups): the
+  // regions of each side that pass the area and shape tests. A ball before a poster of a near hue
+  // inside the class's window, found before the colour model has learnt its hue (a gate then
+  // keeps it apart).
   std::vector<Region> splitByHue(const cv::Mat& filtered, const cv::Mat& labels,
                                  const cv::Mat& blob, const cv::Rect& bbox, size_t ci,
                                  const cv::Point& offset, const Limits& limits) const;
-  static constexpr double kMinHueGapDeg = 5;
-  static constexpr double kMinHueSeparation = 3;
+  static constexpr int kMaxHueSplitBoxPerPixel = 4;
 
   DetectorParams params_;
   std::vector<cv::Moments> templates_;

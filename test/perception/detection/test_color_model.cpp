@@ -46,13 +46,15 @@ std::optional<perception::Region> onlyRed(const std::vector<perception::Region>&
   return red;
 }
 
-// A grey image with noise (sigma 2), a poster of `poster_bgr` and a disc of kRed overlapping it.
-cv::Mat ballOnPoster(const cv::Vec3b& poster_bgr, const cv::Point2d& centre, double radius_px) {
+// A grey image with noise (sigma 2), a poster of `poster_bgr` and a disc of ball_bgr overlapping
+// it.
+cv::Mat ballOnPoster(const cv::Vec3b& poster_bgr, const cv::Point2d& centre, double radius_px,
+                     const cv::Vec3b& ball_bgr = kRed) {
   cv::Mat img(240, 320, CV_8UC3, cv::Scalar(120, 125, 130));
   cv::rectangle(img, cv::Rect(150, 60, 140, 120), cv::Scalar(poster_bgr), cv::FILLED);
   // Drawn at 1/16 px so that its centre is exact.
   cv::circle(img, cv::Point(cvRound(centre.x * 16), cvRound(centre.y * 16)),
-             cvRound(radius_px * 16), cv::Scalar(kRed), cv::FILLED, cv::LINE_AA, 4);
+             cvRound(radius_px * 16), cv::Scalar(ball_bgr), cv::FILLED, cv::LINE_AA, 4);
   cv::Mat noise(img.size(), CV_16SC3);
   cv::RNG rng(5);
   rng.fill(noise, cv::RNG::NORMAL, 0, 2);
@@ -201,10 +203,102 @@ TEST(ColorModel, ABlobIsSplitByHueOnlyWhenItsHuesAreTwoGroups) {
     return false;
   };
   EXPECT_FALSE(ballFound(kRed)) << "the same hue: nothing to split";
-  // (30, 38, 210): hue 2.3 deg from the ball's, under kMinHueGapDeg.
+  // (30, 38, 210): hue 2.3 deg from the ball's, under HueGroups::kMinGapDeg.
   EXPECT_FALSE(ballFound(cv::Vec3b(30, 38, 210))) << "hues too near to be told apart";
   EXPECT_TRUE(ballFound(cv::Vec3b(30, 80, 210)));  // 15.6 deg: two groups
   EXPECT_TRUE(ballFound(cv::Vec3b(120, 125, 130))) << "a grey wall: the ball alone";
+}
+
+// Hues either side of the red window's 0 deg: a ball of hue 351 before a poster of 10.6.
+TEST(ColorModel, ABlobIsSplitByHueAcrossZeroDegrees) {
+  const cv::Point2d centre(170.3, 120.6);
+  perception::DetectorParams params = defaultClasses();
+  params.classes[0].max_area_px2 = 1e6;
+  const perception::Detector detector(params);
+  const cv::Mat img = ballOnPoster(cv::Vec3b(30, 65, 210), centre, 18, cv::Vec3b(60, 30, 210));
+  const auto ball = onlyRed(detector.detect(img));
+  ASSERT_TRUE(ball.has_value());
+  EXPECT_LT(std::hypot(ball->centroid_px.x - centre.x, ball->centroid_px.y - centre.y), 0.5);
+  EXPECT_NEAR(ball->colour.hue_offset_deg, -9, 1.5);  // 351 deg, from the window's centre 0
+}
+
+// A part of the image or a window around the blob splits it as the full scan does, to the bit.
+TEST(ColorModel, AHueSplitInAPartOrAWindowIsTheFullScans) {
+  const cv::Point2d centre(170.3, 120.6);
+  perception::DetectorParams params = defaultClasses();
+  params.classes[0].max_area_px2 = 1e6;
+  const perception::Detector detector(params);
+  const cv::Mat img = ballOnPoster(cv::Vec3b(30, 80, 210), centre, 18);
+  const auto full = onlyRed(detector.detect(img));
+  ASSERT_TRUE(full.has_value());
+  const int margin = detector.exactMarginPx();
+  const cv::Rect part(100, 20, 220, 200);  // reaches the image's right edge
+  const auto in_part = onlyRed(detector.detect(img(part).clone(), part.tl()));
+  const cv::Rect window(140, 50, 160, 140);
+  const cv::Rect crop = cv::Rect(window.x - margin, window.y - margin, window.width + 2 * margin,
+                                 window.height + 2 * margin) &
+                        cv::Rect(0, 0, img.cols, img.rows);
+  bool cut = true;
+  const auto in_window =
+      onlyRed(detector.detectWindow(img(crop).clone(), crop.tl(), window, img.size(), &cut));
+  EXPECT_FALSE(cut);
+  for (const auto& got : {in_part, in_window}) {
+    ASSERT_TRUE(got.has_value());
+    EXPECT_DOUBLE_EQ(got->centroid_px.x, full->centroid_px.x);
+    EXPECT_DOUBLE_EQ(got->centroid_px.y, full->centroid_px.y);
+    EXPECT_DOUBLE_EQ(got->area_px2, full->area_px2);
+    EXPECT_EQ(got->bbox, full->bbox);
+  }
+}
+
+namespace {
+// `count` levels of a normal distribution (mean, sigma in levels), clipped to 0..255.
+void addNormal(std::vector<uint8_t>* levels, int count, double mean, double sigma, uint64_t seed) {
+  cv::RNG rng(seed);
+  for (int i = 0; i < count; ++i) {
+    levels->push_back(cv::saturate_cast<uint8_t>(mean + rng.gaussian(sigma)));
+  }
+}
+}  // namespace
+
+// Two groups need a gap, separation and a valley; Otsu's split of one even spread has a ratio of
+// gap to pooled deviation of sqrt(12) = 3.46 (halves of width w: gap w, deviation w / sqrt(12)).
+TEST(ColorModel, TwoHueGroupsAreTwoObjectsNotOneSpread) {
+  const double per_deg = 255.0 / 40;  // the red window, 340 .. 20
+  std::vector<uint8_t> two;
+  addNormal(&two, 2000, 100, 1 * per_deg, 1);
+  addNormal(&two, 20000, 100 + 15 * per_deg, 1 * per_deg, 2);
+  const perception::HueGroups g = perception::twoHueGroups(two, per_deg, 300);
+  EXPECT_TRUE(g.two);
+  EXPECT_NEAR(g.gap_deg, 15, 0.2);
+  EXPECT_NEAR(g.pooled_sigma_deg, 1, 0.1);
+  EXPECT_GT(g.threshold, 100 + 2 * per_deg);
+  EXPECT_LT(g.threshold, 100 + 13 * per_deg);
+  EXPECT_LT(g.valley_fraction, 0.01);
+  // The smaller group under min_pixels: one object and noise.
+  EXPECT_FALSE(perception::twoHueGroups(two, per_deg, 2500).two);
+
+  std::vector<uint8_t> even;
+  for (int level = 0; level < 256; ++level) even.insert(even.end(), 100, level);
+  const perception::HueGroups e = perception::twoHueGroups(even, per_deg, 300);
+  EXPECT_FALSE(e.two);
+  EXPECT_NEAR(e.gap_deg / e.pooled_sigma_deg, std::sqrt(12.0), 0.05);
+  EXPECT_GT(e.valley_fraction, 0.9);
+
+  std::vector<uint8_t> one;
+  addNormal(&one, 20000, 128, 3 * per_deg, 3);
+  EXPECT_FALSE(perception::twoHueGroups(one, per_deg, 300).two);
+
+  std::vector<uint8_t> near;  // 4 deg apart, each 0.5 deg wide: a valley, but under kMinGapDeg
+  addNormal(&near, 5000, 100, 0.5 * per_deg, 4);
+  addNormal(&near, 5000, 100 + 4 * per_deg, 0.5 * per_deg, 5);
+  const perception::HueGroups n = perception::twoHueGroups(near, per_deg, 300);
+  EXPECT_FALSE(n.two);
+  EXPECT_NEAR(n.gap_deg, 4, 0.2);
+  EXPECT_LT(n.valley_fraction, 0.1);
+
+  EXPECT_FALSE(perception::twoHueGroups({}, per_deg, 0).two);
+  EXPECT_FALSE(perception::twoHueGroups({7}, per_deg, 0).two);
 }
 
 TEST(ColorModel, LearnsAtItsRateAndForgets) {
