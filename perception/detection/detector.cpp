@@ -254,6 +254,10 @@ double Detector::hueDegOf(uchar b, uchar g, uchar r) const {
   return 0.1 * hue_tenths_[static_cast<size_t>((g - b + 255) * 1021 + 2 * r - g - b + 510)];
 }
 
+double Detector::hueOffsetDeg(uchar b, uchar g, uchar r, size_t class_index) const {
+  return hueDifferenceDeg(hueDegOf(b, g, r), hue_centre_deg_[class_index]);
+}
+
 void Detector::adaptLabels(const cv::Mat& bgr, cv::Mat* labels) const {
   const size_t n = params_.classes.size();
   uint8_t gated_bits = 0;
@@ -350,7 +354,7 @@ RegionColour Detector::measureColour(const cv::Mat& bgr, const cv::Mat& mask,
       sat_m2 += ds * (sat - c.saturation);
       c.intensity += (intensityOf(sum) - c.intensity) / c.pixels;
       if (b == g && g == r) continue;
-      const double off = hueDifferenceDeg(hueDegOf(b, g, r), hue_centre_deg_[class_index]);
+      const double off = hueOffsetDeg(b, g, r, class_index);
       ++hue_n;
       const double dh = off - c.hue_offset_deg;
       c.hue_offset_deg += dh / hue_n;
@@ -471,9 +475,8 @@ std::vector<Region> Detector::detectIn(const cv::Mat& bgr, const cv::Point& offs
           }
         }
         // Two objects of the class's window but of hues apart (a ball before a poster of a near
-        // hue, before any hue is learnt): each on its own.
-        // Only a blob that can hold two objects, filling a quarter of its box at least: all the
-        // splits of a scan then touch at most four times the part's pixels.
+        // hue, before any hue is learnt): each on its own. Only a blob that can hold two objects
+        // and fills a quarter of its box: a scan's splits touch at most four times its pixels.
         if (!shape_ok && hue_splits < kMaxSplitsPerScan && !greyInClass(c) &&
             mo.m00 >= 2 * c.min_area_px2 * limits.min_area_factor &&
             bbox.area() <= kMaxHueSplitBoxPerPixel * mo.m00) {
@@ -544,8 +547,8 @@ std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat&
   // Its pixels of the class's colour: their hues' offsets from the class's hue centre, scaled to
   // 0..255 over the class's window (Otsu's threshold is OpenCV's, on 8 bits), in `levels` (-1:
   // not one of them) and in `values`, one after the other.
-  double width_deg = std::fmod(c.hue_max_deg - c.hue_min_deg + 360.0, 360.0);
-  if (width_deg <= 0) width_deg = 360;
+  const double width_deg = 2 * hueWindowHalfwidthDeg(c.hue_min_deg, c.hue_max_deg);
+  if (width_deg <= 0) return {};  // one hue: no two groups of them
   const double levels_per_deg = 255 / width_deg;
   cv::Mat levels(bbox.size(), CV_16S, cv::Scalar(-1));
   std::vector<uint8_t> values;
@@ -558,7 +561,7 @@ std::vector<Region> Detector::splitByHue(const cv::Mat& filtered, const cv::Mat&
     for (int x = 0; x < bbox.width; ++x) {
       const uchar bl = in[3 * x], gr = in[3 * x + 1], rd = in[3 * x + 2];
       if (!b[x] || !(l[x] & bit) || (bl == gr && gr == rd)) continue;
-      const double offset_deg = hueDifferenceDeg(hueDegOf(bl, gr, rd), hue_centre_deg_[ci]);
+      const double offset_deg = hueOffsetDeg(bl, gr, rd, ci);
       const uchar level = cv::saturate_cast<uchar>((offset_deg + width_deg / 2) * levels_per_deg);
       out[x] = level;
       values.push_back(level);

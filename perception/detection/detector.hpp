@@ -121,6 +121,8 @@ class Detector {
   // The colour of a region's pixels (mask: its pixels in bgr).
   RegionColour measureColour(const cv::Mat& bgr, const cv::Mat& mask, size_t class_index) const;
   double hueDegOf(uchar b, uchar g, uchar r) const;
+  // A pixel's hue from its class's window centre, wrapped to (-180, 180].
+  double hueOffsetDeg(uchar b, uchar g, uchar r, size_t class_index) const;
   // A level's tests: the classes' area limits times these factors, the shape test or none.
   struct Limits {
     double min_area_factor = 1, max_area_factor = 1;

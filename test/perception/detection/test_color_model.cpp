@@ -65,6 +65,15 @@ cv::Mat ballOnPoster(const cv::Vec3b& poster_bgr, const cv::Point2d& centre, dou
   return img;
 }
 
+// The classes with room for a poster's blob (its area above the red class's default limit), and
+// where ballOnPoster's ball is drawn in the hue split's tests.
+perception::DetectorParams posterClasses() {
+  perception::DetectorParams params = defaultClasses();
+  params.classes[0].max_area_px2 = 1e6;
+  return params;
+}
+const cv::Point2d kBallCentre(170.3, 120.6);
+
 }  // namespace
 
 TEST(ColorModel, HueWindowArithmetic) {
@@ -137,11 +146,10 @@ TEST(ColorModel, TheRegionsColourIsMeasured) {
 // split at their threshold: the ball on its own. Gated to the ball's hue, the ball alone.
 TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
   const cv::Vec3b poster(30, 80, 210);
-  const cv::Point2d centre(170.3, 120.6);
+  const cv::Point2d centre = kBallCentre;
   const double radius = 18;
   const cv::Mat img = ballOnPoster(poster, centre, radius);
-  perception::DetectorParams params = defaultClasses();
-  params.classes[0].max_area_px2 = 1e6;
+  perception::DetectorParams params = posterClasses();
   const perception::Detector plain(params);
   // The blob the ball and the poster make fails the circle: only the split finds the ball.
   const cv::Mat blob = plain.mask(img, 0);
@@ -189,10 +197,8 @@ TEST(ColorModel, AHueGateSeparatesABallFromAPosterOfANearHue) {
 // The split by hue takes only what is two groups of hues, each an object: a ball before a poster
 // of its own hue, or of a hue too near, stays one blob (no ball); on a grey wall a ball needs none.
 TEST(ColorModel, ABlobIsSplitByHueOnlyWhenItsHuesAreTwoGroups) {
-  const cv::Point2d centre(170.3, 120.6);
-  perception::DetectorParams params = defaultClasses();
-  params.classes[0].max_area_px2 = 1e6;
-  const perception::Detector detector(params);
+  const cv::Point2d centre = kBallCentre;
+  const perception::Detector detector(posterClasses());
   auto ballFound = [&](const cv::Vec3b& poster) {
     for (const auto& r : detector.detect(ballOnPoster(poster, centre, 18))) {
       if (r.class_index == 0 &&
@@ -211,10 +217,8 @@ TEST(ColorModel, ABlobIsSplitByHueOnlyWhenItsHuesAreTwoGroups) {
 
 // Hues either side of the red window's 0 deg: a ball of hue 351 before a poster of 10.6.
 TEST(ColorModel, ABlobIsSplitByHueAcrossZeroDegrees) {
-  const cv::Point2d centre(170.3, 120.6);
-  perception::DetectorParams params = defaultClasses();
-  params.classes[0].max_area_px2 = 1e6;
-  const perception::Detector detector(params);
+  const cv::Point2d centre = kBallCentre;
+  const perception::Detector detector(posterClasses());
   const cv::Mat img = ballOnPoster(cv::Vec3b(30, 65, 210), centre, 18, cv::Vec3b(60, 30, 210));
   const auto ball = onlyRed(detector.detect(img));
   ASSERT_TRUE(ball.has_value());
@@ -224,10 +228,8 @@ TEST(ColorModel, ABlobIsSplitByHueAcrossZeroDegrees) {
 
 // A part of the image or a window around the blob splits it as the full scan does, to the bit.
 TEST(ColorModel, AHueSplitInAPartOrAWindowIsTheFullScans) {
-  const cv::Point2d centre(170.3, 120.6);
-  perception::DetectorParams params = defaultClasses();
-  params.classes[0].max_area_px2 = 1e6;
-  const perception::Detector detector(params);
+  const cv::Point2d centre = kBallCentre;
+  const perception::Detector detector(posterClasses());
   const cv::Mat img = ballOnPoster(cv::Vec3b(30, 80, 210), centre, 18);
   const auto full = onlyRed(detector.detect(img));
   ASSERT_TRUE(full.has_value());
