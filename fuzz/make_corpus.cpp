@@ -724,6 +724,32 @@ void discMasks() {
   write("fuzz_disc_split", "square", mask(40, 40, {}, true));
 }
 
+// fuzz_color_detect: images painted by the target (size, grey, then records of a rectangle or a
+// disc and its colour): a red ball before a red-orange poster, one of hue 351 before a poster of
+// 10.6 (across the red window's 0), two red balls overlapping, a ball alone.
+void colourImages() {
+  struct Shape {
+    bool disc;
+    int x, y, w, h, b, g, r;
+  };
+  const auto image = [](int w, int h, const std::vector<Shape>& shapes) {
+    Bytes bytes = {static_cast<uint8_t>(w - 8), static_cast<uint8_t>(h - 8), 125};
+    for (const Shape& s : shapes) {
+      for (const int v : {s.disc ? 1 : 0, s.x, s.y, s.w, s.h, s.b, s.g, s.r}) {
+        bytes.push_back(static_cast<uint8_t>(v));
+      }
+    }
+    return bytes;
+  };
+  write("fuzz_color_detect", "ball_before_poster",
+        image(128, 96, {{false, 40, 20, 70, 60, 30, 80, 210}, {true, 60, 50, 15, 0, 30, 30, 210}}));
+  write("fuzz_color_detect", "ball_before_poster_across_0",
+        image(128, 96, {{false, 40, 20, 70, 60, 30, 65, 210}, {true, 60, 50, 15, 0, 60, 30, 210}}));
+  write("fuzz_color_detect", "two_balls",
+        image(96, 64, {{true, 36, 32, 14, 0, 30, 30, 210}, {true, 58, 30, 12, 0, 30, 30, 210}}));
+  write("fuzz_color_detect", "one_ball", image(64, 64, {{true, 31, 33, 12, 0, 200, 60, 40}}));
+}
+
 // fuzz_markers: images with tags drawn by the target (its 18-byte header, fuzz_markers.cpp), on a
 // picture's pixels of exactly the size it cuts both views from; one of noise alone. The tag's size
 // in metres is the one its disparity and pixels give at zoom 1 in the middle of the default rig's
@@ -818,6 +844,7 @@ int main(int argc, char** argv) {
   foxglove();
   onvif_requests();
   discMasks();
+  colourImages();
   markerImages();
   return 0;
 }
